@@ -1,0 +1,7 @@
+//! Scenes: the plain description ([`desc`]), animation evaluation ([`anim`]), the
+//! render-ready frame ([`frame`]) and scenes built in code for tests ([`testing`]).
+
+pub mod anim;
+pub mod desc;
+pub mod frame;
+pub mod testing;

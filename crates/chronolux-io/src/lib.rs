@@ -1,1 +1,9 @@
+//! # chronolux-io
+//!
+//! Bytes ↔ values, no light transport: glTF 2.0 scenes with animation into
+//! [`chronolux_core::scene::desc::SceneDesc`] ([`gltf`]), images out and reference images in
+//! ([`image`]), and frame sequences on disk with their manifest ([`output`]).
 
+pub mod gltf;
+pub mod image;
+pub mod output;

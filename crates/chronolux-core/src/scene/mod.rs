@@ -4,4 +4,5 @@
 pub mod anim;
 pub mod desc;
 pub mod frame;
+pub mod stage;
 pub mod testing;

@@ -1,0 +1,3 @@
+//! The one integration-test binary of chronolux-core (statistical tests).
+
+mod bsdf;

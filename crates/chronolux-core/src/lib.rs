@@ -24,17 +24,17 @@
 //! → `bsdf` → `material` → `scene::desc` → `scene::anim` → `light` → `camera` → `film`
 //! → `scene::frame` → `scene::testing`.
 
-pub mod math;
+pub mod accel;
+pub mod bsdf;
+pub mod camera;
 pub mod color;
-pub mod stats;
+pub mod film;
+pub mod geometry;
+pub mod light;
+pub mod material;
+pub mod math;
 pub mod parallel;
 pub mod sampling;
-pub mod geometry;
-pub mod accel;
-pub mod texture;
-pub mod bsdf;
-pub mod material;
 pub mod scene;
-pub mod light;
-pub mod camera;
-pub mod film;
+pub mod stats;
+pub mod texture;

@@ -74,14 +74,24 @@ pub struct Lobes {
 impl Bsdf {
     /// Lambertian BSDF with `albedo`, shading normal `ns`, geometric normal `ng`.
     pub fn lambert(albedo: Rgb, ns: Vec3, ng: Vec3) -> Self {
-        Bsdf { frame: Frame::from_normal(ns), ng, lobes: Lobes { diffuse: albedo, ..Default::default() } }
+        Bsdf {
+            frame: Frame::from_normal(ns),
+            ng,
+            lobes: Lobes {
+                diffuse: albedo,
+                ..Default::default()
+            },
+        }
     }
 
     /// True if some lobe is not a delta distribution (light sampling can help).
     pub fn has_non_delta(&self) -> bool {
         let l = &self.lobes;
         l.diffuse != Rgb::ZERO
-            || (l.alpha > 1e-3 && (l.specular_tint != Rgb::ZERO || l.metal != Rgb::ZERO || l.transmission != Rgb::ZERO))
+            || (l.alpha > 1e-3
+                && (l.specular_tint != Rgb::ZERO
+                    || l.metal != Rgb::ZERO
+                    || l.transmission != Rgb::ZERO))
     }
 
     /// BSDF value without the cosine factor; zero for delta lobes.
@@ -107,7 +117,13 @@ impl Bsdf {
     }
 
     /// Samples `wi` given `wo`; `u_lobe` chooses the lobe, `u` the direction.
-    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+    pub fn sample(
+        &self,
+        wo: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+        mode: TransportMode,
+    ) -> Option<BsdfSample> {
         let _ = u_lobe;
         let lo = self.frame.to_local(wo);
         if lo.z == 0.0 {
@@ -123,6 +139,13 @@ impl Bsdf {
             return None;
         }
         let f = self.f(wo, wi, mode);
-        Some(BsdfSample { wi, weight: f * li.z.abs() / pdf, pdf, is_delta: false, is_transmission: false, eta: 1.0 })
+        Some(BsdfSample {
+            wi,
+            weight: f * li.z.abs() / pdf,
+            pdf,
+            is_delta: false,
+            is_transmission: false,
+            eta: 1.0,
+        })
     }
 }

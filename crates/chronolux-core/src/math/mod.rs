@@ -62,7 +62,11 @@ pub fn safe_sqrt(x: f32) -> f32 {
 #[inline]
 pub fn spherical_direction(sin_theta: f32, cos_theta: f32, phi: f32) -> Vec3 {
     let (s, c) = phi.sin_cos();
-    Vec3::new(sin_theta.clamp(-1.0, 1.0) * c, sin_theta.clamp(-1.0, 1.0) * s, cos_theta.clamp(-1.0, 1.0))
+    Vec3::new(
+        sin_theta.clamp(-1.0, 1.0) * c,
+        sin_theta.clamp(-1.0, 1.0) * s,
+        cos_theta.clamp(-1.0, 1.0),
+    )
 }
 
 /// True when every component is finite.

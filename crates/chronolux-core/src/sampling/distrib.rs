@@ -28,7 +28,11 @@ impl Distribution1D {
         }
         *cdf.last_mut().unwrap() = 1.0;
         let pmf = weights.iter().map(|&w| (w as f64 / total) as f32).collect();
-        Some(Distribution1D { cdf, pmf, total: total as f32 })
+        Some(Distribution1D {
+            cdf,
+            pmf,
+            total: total as f32,
+        })
     }
 
     pub fn len(&self) -> usize {
@@ -54,7 +58,11 @@ impl Distribution1D {
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
         let n = self.pmf.len();
         // First cdf entry > u, minus one, skipping zero-probability items.
-        let mut i = self.cdf.partition_point(|&c| c <= u).saturating_sub(1).min(n - 1);
+        let mut i = self
+            .cdf
+            .partition_point(|&c| c <= u)
+            .saturating_sub(1)
+            .min(n - 1);
         while self.pmf[i] == 0.0 && i + 1 < n {
             i += 1;
         }

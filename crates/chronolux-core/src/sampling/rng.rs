@@ -14,7 +14,10 @@ impl Pcg32 {
 
     /// Generator for (`seed`, `stream`); different streams are independent sequences.
     pub fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Pcg32 { state: 0, inc: (stream << 1) | 1 };
+        let mut r = Pcg32 {
+            state: 0,
+            inc: (stream << 1) | 1,
+        };
         r.next_u32();
         r.state = r.state.wrapping_add(seed);
         r.next_u32();

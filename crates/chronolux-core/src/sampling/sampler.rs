@@ -27,14 +27,22 @@ impl PixelSampler {
     /// Stream for pixel `(x, y)` of `frame`; `seed` is the user's seed.
     pub fn new(seed: u64, frame: u32, x: u32, y: u32) -> Self {
         let key = super::hash_words(&[seed, frame as u64, x as u64, y as u64]);
-        PixelSampler { seed: key as u32, index: 0, dim: 0, rng: Pcg32::new(key, 0) }
+        PixelSampler {
+            seed: key as u32,
+            index: 0,
+            dim: 0,
+            rng: Pcg32::new(key, 0),
+        }
     }
 
     /// Starts sample `index` of this pixel.
     pub fn start_sample(&mut self, index: u32) {
         self.index = index;
         self.dim = 0;
-        self.rng = Pcg32::new(super::mix64(self.seed as u64 ^ ((index as u64) << 32)), self.seed as u64);
+        self.rng = Pcg32::new(
+            super::mix64(self.seed as u64 ^ ((index as u64) << 32)),
+            self.seed as u64,
+        );
     }
 
     #[inline]

@@ -2,7 +2,9 @@
 //! rotations, CUBICSPLINE), the resulting node pose, and per-frame vertex deformation by
 //! morph targets and linear blend skinning (on the CPU).
 
-use super::desc::{AnimationId, Channel, ChannelTarget, Interpolation, NodeId, Primitive, SceneDesc, Trs};
+use super::desc::{
+    AnimationId, Channel, ChannelTarget, Interpolation, NodeId, Primitive, SceneDesc, Trs,
+};
 use crate::math::{Mat3, Mat4, Quat, Vec3, Vec4};
 
 /// Frame timing of an animation: frame `f` is shown at time `f / fps`.
@@ -22,10 +24,19 @@ impl Timeline {
 pub fn evaluate_channel(ch: &Channel, t: f32) -> Vec<f32> {
     let n = ch.components;
     let keys = ch.times.len();
-    let stride = if ch.interpolation == Interpolation::CubicSpline { 3 * n } else { n };
+    let stride = if ch.interpolation == Interpolation::CubicSpline {
+        3 * n
+    } else {
+        n
+    };
     // Offset of the value (not tangents) of key k.
     let value_at = |k: usize| -> &[f32] {
-        let base = k * stride + if ch.interpolation == Interpolation::CubicSpline { n } else { 0 };
+        let base = k * stride
+            + if ch.interpolation == Interpolation::CubicSpline {
+                n
+            } else {
+                0
+            };
         &ch.values[base..base + n]
     };
     if keys == 0 {
@@ -66,8 +77,9 @@ pub fn evaluate_channel(ch: &Channel, t: f32) -> Vec<f32> {
             let h10 = s3 - 2.0 * s2 + s;
             let h01 = -2.0 * s3 + 3.0 * s2;
             let h11 = s3 - s2;
-            let mut v: Vec<f32> =
-                (0..n).map(|i| h00 * v0[i] + h10 * dt * out0[i] + h01 * v1[i] + h11 * dt * in1[i]).collect();
+            let mut v: Vec<f32> = (0..n)
+                .map(|i| h00 * v0[i] + h10 * dt * out0[i] + h01 * v1[i] + h11 * dt * in1[i])
+                .collect();
             if is_rotation {
                 let q = Quat::from_xyzw(v[0], v[1], v[2], v[3]).normalize();
                 v = vec![q.x, q.y, q.z, q.w];
@@ -114,7 +126,9 @@ pub fn pose_at(desc: &SceneDesc, anim: Option<AnimationId>, t: f32) -> Pose {
             match ch.target {
                 ChannelTarget::Translation => local[i].translation = Vec3::new(v[0], v[1], v[2]),
                 ChannelTarget::Scale => local[i].scale = Vec3::new(v[0], v[1], v[2]),
-                ChannelTarget::Rotation => local[i].rotation = Quat::from_xyzw(v[0], v[1], v[2], v[3]).normalize(),
+                ChannelTarget::Rotation => {
+                    local[i].rotation = Quat::from_xyzw(v[0], v[1], v[2], v[3]).normalize()
+                }
                 ChannelTarget::Weights => weights[i] = v,
             }
         }
@@ -128,7 +142,11 @@ pub fn pose_at(desc: &SceneDesc, anim: Option<AnimationId>, t: f32) -> Pose {
             None => m,
         };
     }
-    Pose { local, world, weights }
+    Pose {
+        local,
+        world,
+        weights,
+    }
 }
 
 /// Which nodes change under clip `anim`: those with a channel, their descendants, and mesh
@@ -150,10 +168,10 @@ pub fn dynamic_nodes(desc: &SceneDesc, anim: Option<AnimationId>) -> Vec<bool> {
         }
     }
     for id in desc.topological_order() {
-        if let Some(p) = desc.nodes[id.index()].parent {
-            if dynamic[p.index()] {
-                dynamic[id.index()] = true;
-            }
+        if let Some(p) = desc.nodes[id.index()].parent
+            && dynamic[p.index()]
+        {
+            dynamic[id.index()] = true;
         }
     }
     let mut out = dynamic.clone();
@@ -161,10 +179,13 @@ pub fn dynamic_nodes(desc: &SceneDesc, anim: Option<AnimationId>) -> Vec<bool> {
         if morph[i] {
             out[i] = true;
         }
-        if let Some(s) = n.skin {
-            if desc.skins[s.index()].joints.iter().any(|j| dynamic[j.index()]) {
-                out[i] = true;
-            }
+        if let Some(s) = n.skin
+            && desc.skins[s.index()]
+                .joints
+                .iter()
+                .any(|j| dynamic[j.index()])
+        {
+            out[i] = true;
         }
     }
     out
@@ -183,7 +204,9 @@ pub fn deform_primitive(
     let n = &desc.nodes[node.index()];
     let weights = &pose.weights[node.index()];
     let morphed = !prim.morph_targets.is_empty() && weights.iter().any(|&w| w != 0.0);
-    let skin = n.skin.filter(|_| prim.joints.is_some() && prim.joint_weights.is_some());
+    let skin = n
+        .skin
+        .filter(|_| prim.joints.is_some() && prim.joint_weights.is_some());
     if !morphed && skin.is_none() {
         return None;
     }
@@ -234,13 +257,17 @@ pub fn deform_primitive(
 
 fn blend(mats: &[Mat4], j: [u16; 4], w: Vec4) -> Mat4 {
     let sum = w.x + w.y + w.z + w.w;
-    let w = if sum > 0.0 { w / sum } else { Vec4::new(1.0, 0.0, 0.0, 0.0) };
+    let w = if sum > 0.0 {
+        w / sum
+    } else {
+        Vec4::new(1.0, 0.0, 0.0, 0.0)
+    };
     let mut m = Mat4::ZERO;
     for k in 0..4 {
-        if w[k] != 0.0 {
-            if let Some(jm) = mats.get(j[k] as usize) {
-                m += *jm * w[k];
-            }
+        if w[k] != 0.0
+            && let Some(jm) = mats.get(j[k] as usize)
+        {
+            m += *jm * w[k];
         }
     }
     m
@@ -250,17 +277,39 @@ fn blend(mats: &[Mat4], j: [u16; 4], w: Vec4) -> Mat4 {
 mod tests {
     use super::*;
 
-    fn ch(interp: Interpolation, target: ChannelTarget, times: Vec<f32>, values: Vec<f32>, n: usize) -> Channel {
-        Channel { node: NodeId(0), target, interpolation: interp, times, values, components: n }
+    fn ch(
+        interp: Interpolation,
+        target: ChannelTarget,
+        times: Vec<f32>,
+        values: Vec<f32>,
+        n: usize,
+    ) -> Channel {
+        Channel {
+            node: NodeId(0),
+            target,
+            interpolation: interp,
+            times,
+            values,
+            components: n,
+        }
     }
 
     #[test]
     fn linear_step_and_clamping() {
-        let c = ch(Interpolation::Linear, ChannelTarget::Translation, vec![1.0, 3.0], vec![0., 0., 0., 2., 4., 6.], 3);
+        let c = ch(
+            Interpolation::Linear,
+            ChannelTarget::Translation,
+            vec![1.0, 3.0],
+            vec![0., 0., 0., 2., 4., 6.],
+            3,
+        );
         assert_eq!(evaluate_channel(&c, 0.0), vec![0., 0., 0.]);
         assert_eq!(evaluate_channel(&c, 2.0), vec![1., 2., 3.]);
         assert_eq!(evaluate_channel(&c, 9.0), vec![2., 4., 6.]);
-        let s = Channel { interpolation: Interpolation::Step, ..c };
+        let s = Channel {
+            interpolation: Interpolation::Step,
+            ..c
+        };
         assert_eq!(evaluate_channel(&s, 2.9), vec![0., 0., 0.]);
         assert_eq!(evaluate_channel(&s, 3.0), vec![2., 4., 6.]);
     }
@@ -269,7 +318,13 @@ mod tests {
     fn slerp_takes_the_short_way() {
         let a = Quat::from_rotation_y(0.1);
         let b = -Quat::from_rotation_y(0.3); // same rotation, opposite hemisphere
-        let c = ch(Interpolation::Linear, ChannelTarget::Rotation, vec![0.0, 1.0], vec![a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w], 4);
+        let c = ch(
+            Interpolation::Linear,
+            ChannelTarget::Rotation,
+            vec![0.0, 1.0],
+            vec![a.x, a.y, a.z, a.w, b.x, b.y, b.z, b.w],
+            4,
+        );
         let v = evaluate_channel(&c, 0.5);
         let q = Quat::from_xyzw(v[0], v[1], v[2], v[3]);
         assert!(q.angle_between(Quat::from_rotation_y(0.2)) < 1e-4);
@@ -279,7 +334,13 @@ mod tests {
     fn cubic_spline_hits_keys_and_hermite_midpoint() {
         // One component, keys at 0 and 2 with values 0 and 1, out-tangent 1 at key 0, in-tangent 0 at key 1.
         // Layout per key: in, value, out.
-        let c = ch(Interpolation::CubicSpline, ChannelTarget::Translation, vec![0.0, 2.0], vec![0., 0., 1., 0., 1., 0.], 1);
+        let c = ch(
+            Interpolation::CubicSpline,
+            ChannelTarget::Translation,
+            vec![0.0, 2.0],
+            vec![0., 0., 1., 0., 1., 0.],
+            1,
+        );
         assert_eq!(evaluate_channel(&c, 0.0), vec![0.0]);
         assert_eq!(evaluate_channel(&c, 2.0), vec![1.0]);
         // s = 0.5: h00=.5 h10=.125 h01=.5 h11=-.125; v = .5*0 + .125*2*1 + .5*1 + 0 = 0.75

@@ -72,7 +72,11 @@ pub struct Trs {
 
 impl Default for Trs {
     fn default() -> Self {
-        Trs { translation: Vec3::ZERO, rotation: Quat::IDENTITY, scale: Vec3::ONE }
+        Trs {
+            translation: Vec3::ZERO,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::ONE,
+        }
     }
 }
 
@@ -185,10 +189,18 @@ pub struct TextureRef {
 }
 
 impl TextureRef {
-    pub const IDENTITY_TRANSFORM: [Vec2; 3] = [Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0), Vec2::new(0.0, 0.0)];
+    pub const IDENTITY_TRANSFORM: [Vec2; 3] = [
+        Vec2::new(1.0, 0.0),
+        Vec2::new(0.0, 1.0),
+        Vec2::new(0.0, 0.0),
+    ];
 
     pub fn new(texture: TextureId, uv_set: u32) -> Self {
-        TextureRef { texture, uv_set, transform: Self::IDENTITY_TRANSFORM }
+        TextureRef {
+            texture,
+            uv_set,
+            transform: Self::IDENTITY_TRANSFORM,
+        }
     }
 }
 
@@ -271,7 +283,12 @@ impl Material {
     /// (white, metallic 1, roughness 1) — we follow common viewers and render it as a
     /// white rough dielectric (metallic 0) so untextured test assets stay visible.
     pub fn gltf_default() -> Self {
-        Material { name: "default".into(), metallic: 0.0, double_sided: true, ..Default::default() }
+        Material {
+            name: "default".into(),
+            metallic: 0.0,
+            double_sided: true,
+            ..Default::default()
+        }
     }
 
     /// A plain Lambertian-looking material: diffuse `albedo`, no specular layer.
@@ -304,7 +321,10 @@ pub struct LightDesc {
 pub enum LightKind {
     Point,
     /// Cone angles in radians from the axis.
-    Spot { inner_cone: f32, outer_cone: f32 },
+    Spot {
+        inner_cone: f32,
+        outer_cone: f32,
+    },
     Directional,
 }
 
@@ -318,7 +338,11 @@ pub struct CameraDesc {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
     /// Vertical field of view in radians; aspect ratio (w/h) if the file fixes it.
-    Perspective { yfov: f32, aspect: Option<f32>, znear: f32 },
+    Perspective {
+        yfov: f32,
+        aspect: Option<f32>,
+        znear: f32,
+    },
     /// Half-width and half-height of the view volume.
     Orthographic { xmag: f32, ymag: f32 },
 }
@@ -342,7 +366,10 @@ pub struct Animation {
 impl Animation {
     /// Largest key time over all channels (0 for an empty clip).
     pub fn duration(&self) -> f32 {
-        self.channels.iter().filter_map(|c| c.times.last().copied()).fold(0.0, f32::max)
+        self.channels
+            .iter()
+            .filter_map(|c| c.times.last().copied())
+            .fold(0.0, f32::max)
     }
 }
 
@@ -395,7 +422,10 @@ impl SceneDesc {
         if let Some(i) = self.animations.iter().position(|a| a.name == key) {
             return Some(AnimationId(i as u32));
         }
-        key.parse::<usize>().ok().filter(|&i| i < self.animations.len()).map(|i| AnimationId(i as u32))
+        key.parse::<usize>()
+            .ok()
+            .filter(|&i| i < self.animations.len())
+            .map(|i| AnimationId(i as u32))
     }
 
     /// Total triangle count over mesh instances in the scene.
@@ -403,7 +433,13 @@ impl SceneDesc {
         self.nodes
             .iter()
             .filter_map(|n| n.mesh)
-            .map(|m| self.meshes[m.index()].primitives.iter().map(|p| p.indices.len()).sum::<usize>())
+            .map(|m| {
+                self.meshes[m.index()]
+                    .primitives
+                    .iter()
+                    .map(|p| p.indices.len())
+                    .sum::<usize>()
+            })
             .sum()
     }
 }

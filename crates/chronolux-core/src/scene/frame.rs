@@ -1,1 +1,696 @@
-//! (in progress)
+//! The render-ready frame: [`FrameScene`] (immutable, `Sync`) and the [`FrameBuilder`]
+//! that makes one per animation time while keeping everything that does not change.
+//!
+//! Geometry classes, decided once from the animation (never from pixels):
+//! - **static**: nodes no channel affects; their primitives (deformed once if morphed or
+//!   skinned) are baked into one world-space BLAS built once for the whole animation;
+//! - **rigid**: nodes moved by the animation but not deformed; each mesh has one
+//!   object-space BLAS shared by all its instances and kept across frames; only the
+//!   instance transform changes per frame;
+//! - **deformed**: skinned or morphed nodes whose pose changes; their world-space BLAS is
+//!   rebuilt per frame (topology is fixed, so geometry ids stay the same).
+//!
+//! Geometry ids ([`GeometryId`]: one per (node, primitive), in node order) are stable over
+//! the animation, so per-element data of later techniques can be keyed by them.
+
+use super::anim::{self, Pose};
+use super::desc::{AlphaMode, AnimationId, CameraDesc, MaterialId, NodeId, Projection, SceneDesc};
+use crate::accel::{Accel, Blas, Hit, Instance, TriRef};
+use crate::camera::Camera;
+use crate::color::Rgb;
+use crate::geometry::{Bounds3, Ray};
+use crate::light::{Light, LightSampler};
+use crate::material::{self, ShadingPoint};
+use crate::math::{Affine3A, Mat3, Mat4, Vec2, Vec3, Vec4};
+use crate::scene::desc::{Material, Texture};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// Stable id of a (node, primitive) pair.
+pub type GeometryId = u32;
+
+/// Vertex data of one geometry in the space of its BLAS.
+#[derive(Clone, Debug)]
+pub struct GeometryData {
+    pub node: NodeId,
+    pub primitive: u32,
+    pub positions: Arc<Vec<Vec3>>,
+    pub normals: Option<Arc<Vec<Vec3>>>,
+    pub tangents: Option<Arc<Vec<Vec4>>>,
+    pub uvs: [Option<Arc<Vec<Vec2>>>; 2],
+    pub indices: Arc<Vec<[u32; 3]>>,
+    /// Index into [`FrameScene::materials`].
+    pub material: u32,
+    /// `true` when the data is in world space; otherwise in the object space of the
+    /// instance that hit it.
+    pub world_space: bool,
+}
+
+/// Everything about a surface point that shading needs (world space).
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceInteraction {
+    pub p: Vec3,
+    /// Geometric normal, front side per the (determinant-corrected) winding.
+    pub ng: Vec3,
+    pub shading: ShadingPoint,
+    pub material: u32,
+    pub tri: TriRef,
+    pub instance: u32,
+}
+
+/// How to choose the camera.
+#[derive(Clone, Debug, Default)]
+pub enum CameraChoice {
+    /// The scene's first camera; automatic framing when it has none.
+    #[default]
+    First,
+    /// A camera node by name (the node's or the camera's).
+    Named(String),
+}
+
+/// One frame, ready to render.
+pub struct FrameScene {
+    pub time: f32,
+    pub accel: Accel,
+    pub geometry: Arc<Vec<GeometryData>>,
+    pub materials: Arc<Vec<Material>>,
+    pub textures: Arc<Vec<Texture>>,
+    pub lights: Vec<Light>,
+    pub light_sampler: LightSampler,
+    /// Light index of triangle 0 of each geometry (`u32::MAX`: not emissive); triangle `k`
+    /// of an emissive geometry is light `base + k`.
+    pub emissive_base: Vec<u32>,
+    pub environment: Option<Rgb>,
+    /// Index of the environment light in `lights`.
+    pub environment_light: Option<usize>,
+    pub camera: Camera,
+    pub bounds: Bounds3,
+    pub scene_radius: f32,
+    /// Per-geometry: material is alpha tested.
+    alpha_tested: Vec<bool>,
+}
+
+impl FrameScene {
+    /// Whether a ray may stop at this triangle point (alpha mask / stochastic blend).
+    #[inline]
+    pub fn accept(&self, tri: TriRef, b1: f32, b2: f32) -> bool {
+        let g = &self.geometry[tri.geometry as usize];
+        if !self.alpha_tested[tri.geometry as usize] {
+            return true;
+        }
+        let m = &self.materials[g.material as usize];
+        let uv = interp_uvs(g, tri.triangle, b1, b2);
+        let a = material::alpha_at(m, &self.textures, uv);
+        match m.alpha_mode {
+            AlphaMode::Blend => {
+                // Deterministic stochastic transparency: hash the hit location.
+                let h = crate::sampling::hash_words(&[
+                    tri.geometry as u64,
+                    tri.triangle as u64,
+                    b1.to_bits() as u64,
+                    b2.to_bits() as u64,
+                ]);
+                ((h >> 40) as f32 / (1u64 << 24) as f32) < a
+            }
+            _ => a > 0.5,
+        }
+    }
+
+    /// Closest surface along `ray`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.accel
+            .intersect(ray, |t, b1, b2| self.accept(t, b1, b2))
+    }
+
+    /// Whether anything blocks `ray` before `ray.tmax`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.accel.occluded(ray, |t, b1, b2| self.accept(t, b1, b2))
+    }
+
+    /// Surface data at a hit.
+    pub fn interaction(&self, hit: &Hit, ray: &Ray) -> SurfaceInteraction {
+        self.surface_at(hit.tri, hit.instance, hit.b1, hit.b2, Some(ray.at(hit.t)))
+    }
+
+    /// Surface data at barycentrics (b1, b2) of a triangle of an instance.
+    pub fn surface_at(
+        &self,
+        tri: TriRef,
+        instance: u32,
+        b1: f32,
+        b2: f32,
+        p_hint: Option<Vec3>,
+    ) -> SurfaceInteraction {
+        let g = &self.geometry[tri.geometry as usize];
+        let [i0, i1, i2] = g.indices[tri.triangle as usize].map(|i| i as usize);
+        let b0 = 1.0 - b1 - b2;
+        let (p0, p1, p2) = (g.positions[i0], g.positions[i1], g.positions[i2]);
+        let (to_world, normal_m) = if g.world_space {
+            (Affine3A::IDENTITY, Mat3::IDENTITY)
+        } else {
+            let inst = &self.accel.instances()[instance as usize];
+            (
+                inst.world_from_object,
+                Mat3::from(inst.object_from_world.matrix3).transpose(),
+            )
+        };
+        let p_obj = b0 * p0 + b1 * p1 + b2 * p2;
+        let p = p_hint.unwrap_or_else(|| to_world.transform_point3(p_obj));
+        let ng_obj = (p1 - p0).cross(p2 - p0);
+        let ng = (normal_m * ng_obj).normalize_or_zero();
+        let ns = match &g.normals {
+            Some(n) => {
+                let v = normal_m * (b0 * n[i0] + b1 * n[i1] + b2 * n[i2]);
+                let v = v.normalize_or_zero();
+                if v == Vec3::ZERO { ng } else { v }
+            }
+            None => ng,
+        };
+        let uv = interp_uvs(g, tri.triangle, b1, b2);
+        let mut dpdu = Vec3::ZERO;
+        if let Some(uvs) = &g.uvs[0] {
+            let (duv1, duv2) = (uvs[i1] - uvs[i0], uvs[i2] - uvs[i0]);
+            let det = duv1.x * duv2.y - duv1.y * duv2.x;
+            if det.abs() > 1e-12 {
+                let d = ((p1 - p0) * duv2.y - (p2 - p0) * duv1.y) / det;
+                dpdu = to_world.transform_vector3(d);
+            }
+        }
+        let tangent = g.tangents.as_ref().map(|t| {
+            let v = b0 * t[i0] + b1 * t[i1] + b2 * t[i2];
+            let xyz = to_world.transform_vector3(v.truncate()).normalize_or_zero();
+            xyz.extend(if t[i0].w < 0.0 { -1.0 } else { 1.0 })
+        });
+        SurfaceInteraction {
+            p,
+            ng,
+            shading: ShadingPoint {
+                ng,
+                ns,
+                dpdu,
+                tangent,
+                uv,
+            },
+            material: g.material,
+            tri,
+            instance,
+        }
+    }
+
+    /// Emitted radiance of a surface point towards `w` (unit, away from the surface).
+    pub fn emitted(&self, si: &SurfaceInteraction, w: Vec3) -> Rgb {
+        let m = &self.materials[si.material as usize];
+        if m.emissive == Rgb::ZERO {
+            return Rgb::ZERO;
+        }
+        if !m.double_sided && si.ng.dot(w) <= 0.0 {
+            return Rgb::ZERO;
+        }
+        material::emission_at(m, &self.textures, &si.shading)
+    }
+
+    /// Light index of an emissive triangle.
+    pub fn light_of(&self, tri: TriRef) -> Option<usize> {
+        let b = self.emissive_base[tri.geometry as usize];
+        (b != u32::MAX).then(|| (b + tri.triangle) as usize)
+    }
+}
+
+fn interp_uvs(g: &GeometryData, tri: u32, b1: f32, b2: f32) -> [Vec2; 2] {
+    let [i0, i1, i2] = g.indices[tri as usize].map(|i| i as usize);
+    let b0 = 1.0 - b1 - b2;
+    let f = |u: &Option<Arc<Vec<Vec2>>>| {
+        u.as_ref()
+            .map_or(Vec2::ZERO, |u| b0 * u[i0] + b1 * u[i1] + b2 * u[i2])
+    };
+    [f(&g.uvs[0]), f(&g.uvs[1])]
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Class {
+    Static,
+    Rigid,
+    Deformed,
+}
+
+/// One (node, primitive) of the scene.
+struct Slot {
+    node: NodeId,
+    primitive: u32,
+    class: Class,
+    material: u32,
+}
+
+/// Builds [`FrameScene`]s for times of one animation clip, keeping BLASes across frames.
+pub struct FrameBuilder {
+    desc: Arc<SceneDesc>,
+    anim: Option<AnimationId>,
+    slots: Vec<Slot>,
+    materials: Arc<Vec<Material>>,
+    textures: Arc<Vec<Texture>>,
+    alpha_tested: Vec<bool>,
+    static_blas: Option<Arc<Blas>>,
+    static_geometry: HashMap<GeometryId, GeometryData>,
+    /// Object-space BLAS per rigid node (shared by nodes with the same mesh), with the
+    /// first geometry id of the node.
+    rigid: Vec<(NodeId, Arc<Blas>, GeometryId)>,
+    /// Object-space geometry data of rigid slots.
+    rigid_geometry: HashMap<GeometryId, GeometryData>,
+    /// Statistics of the last build.
+    pub last_build: BuildStats,
+    camera: CameraChoice,
+    width: u32,
+    height: u32,
+}
+
+/// What the last [`FrameBuilder::build`] did.
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct BuildStats {
+    pub blas_rebuilt: u32,
+    pub triangles_rebuilt: u64,
+    pub instances: u32,
+    pub seconds: f64,
+}
+
+/// Errors choosing a camera.
+#[derive(Debug, thiserror::Error)]
+pub enum FrameError {
+    #[error("no camera named '{0}' in the scene (cameras: {1})")]
+    NoSuchCamera(String, String),
+}
+
+impl FrameBuilder {
+    pub fn new(
+        desc: Arc<SceneDesc>,
+        anim: Option<AnimationId>,
+        camera: CameraChoice,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, FrameError> {
+        if let CameraChoice::Named(name) = &camera
+            && find_camera(&desc, Some(name)).is_none()
+        {
+            let names: Vec<String> = camera_nodes(&desc)
+                .iter()
+                .map(|(n, c)| format!("{} ({})", c.name, desc.nodes[n.index()].name))
+                .collect();
+            return Err(FrameError::NoSuchCamera(
+                name.clone(),
+                if names.is_empty() {
+                    "none".into()
+                } else {
+                    names.join(", ")
+                },
+            ));
+        }
+        let dynamic = anim::dynamic_nodes(&desc, anim);
+        let mut materials = desc.materials.clone();
+        let default_material = materials.len() as u32;
+        materials.push(Material::gltf_default());
+        let mut slots = Vec::new();
+        for id in desc.topological_order() {
+            let node = &desc.nodes[id.index()];
+            let Some(mesh) = node.mesh else { continue };
+            let mesh = &desc.meshes[mesh.index()];
+            let deforming =
+                node.skin.is_some() || mesh.primitives.iter().any(|p| !p.morph_targets.is_empty());
+            let class = match (dynamic[id.index()], deforming) {
+                (false, _) => Class::Static,
+                (true, false) => Class::Rigid,
+                (true, true) => Class::Deformed,
+            };
+            for (k, p) in mesh.primitives.iter().enumerate() {
+                slots.push(Slot {
+                    node: id,
+                    primitive: k as u32,
+                    class,
+                    material: p.material.map_or(default_material, |m: MaterialId| m.0),
+                });
+            }
+        }
+        let alpha_tested = slots
+            .iter()
+            .map(|s| materials[s.material as usize].alpha_mode != AlphaMode::Opaque)
+            .collect();
+        let textures = Arc::new(desc.textures.clone());
+        let mut b = FrameBuilder {
+            desc,
+            anim,
+            slots,
+            materials: Arc::new(materials),
+            textures,
+            alpha_tested,
+            static_blas: None,
+            static_geometry: HashMap::new(),
+            rigid: Vec::new(),
+            rigid_geometry: HashMap::new(),
+            last_build: BuildStats::default(),
+            camera,
+            width,
+            height,
+        };
+        b.build_persistent();
+        Ok(b)
+    }
+
+    pub fn desc(&self) -> &SceneDesc {
+        &self.desc
+    }
+
+    /// Number of geometries (stable ids `0..n`).
+    pub fn geometry_count(&self) -> usize {
+        self.slots.len()
+    }
+
+    fn geometry_data(&self, gid: usize, pose: &Pose, world: bool) -> GeometryData {
+        let s = &self.slots[gid];
+        let node = &self.desc.nodes[s.node.index()];
+        let mesh = &self.desc.meshes[node.mesh.unwrap().index()];
+        let prim = &mesh.primitives[s.primitive as usize];
+        let (mut pos, mut nrm, skinned) =
+            match anim::deform_primitive(&self.desc, s.node, prim, pose) {
+                Some((p, n)) => (p, n, node.skin.is_some()),
+                None => (prim.positions.clone(), prim.normals.clone(), false),
+            };
+        let mut indices = prim.indices.clone();
+        let mut tangents = prim.tangents.clone();
+        if world && !skinned {
+            let m: Mat4 = pose.world[s.node.index()];
+            let nm = Mat3::from_mat4(m).inverse().transpose();
+            pos.iter_mut().for_each(|p| *p = m.transform_point3(*p));
+            if let Some(n) = nrm.as_mut() {
+                n.iter_mut()
+                    .for_each(|v| *v = (nm * *v).normalize_or_zero());
+            }
+            if let Some(t) = tangents.as_mut() {
+                t.iter_mut().for_each(|v| {
+                    *v = m
+                        .transform_vector3(v.truncate())
+                        .normalize_or_zero()
+                        .extend(v.w)
+                });
+            }
+            // A mirroring transform flips the winding; keep the front face (glTF rule).
+            if m.determinant() < 0.0 {
+                indices.iter_mut().for_each(|t| t.swap(1, 2));
+            }
+        }
+        GeometryData {
+            node: s.node,
+            primitive: s.primitive,
+            positions: Arc::new(pos),
+            normals: nrm.map(Arc::new),
+            tangents: tangents.map(Arc::new),
+            uvs: [
+                prim.uvs.clone().map(Arc::new),
+                prim.uvs1.clone().map(Arc::new),
+            ],
+            indices: Arc::new(indices),
+            material: s.material,
+            world_space: world,
+        }
+    }
+
+    fn blas_items(
+        gid: GeometryId,
+        local: u32,
+        g: &GeometryData,
+        out: &mut Vec<(TriRef, [Vec3; 3])>,
+    ) {
+        let _ = gid;
+        for (k, t) in g.indices.iter().enumerate() {
+            let v = t.map(|i| g.positions[i as usize]);
+            out.push((
+                TriRef {
+                    geometry: local,
+                    triangle: k as u32,
+                },
+                v,
+            ));
+        }
+    }
+
+    fn build_persistent(&mut self) {
+        let pose = anim::pose_at(&self.desc, self.anim, 0.0);
+        let mut items = Vec::new();
+        let mut filter = false;
+        for gid in 0..self.slots.len() {
+            if self.slots[gid].class == Class::Static {
+                let g = self.geometry_data(gid, &pose, true);
+                Self::blas_items(gid as u32, gid as u32, &g, &mut items);
+                filter |= self.alpha_tested[gid];
+                self.static_geometry.insert(gid as u32, g);
+            }
+        }
+        if !items.is_empty() {
+            self.static_blas = Some(Arc::new(Blas::build(&items, filter)));
+        }
+        // Rigid nodes: one object-space BLAS per mesh, shared by nodes using it.
+        let mut by_mesh: HashMap<u32, Arc<Blas>> = HashMap::new();
+        let mut gid = 0usize;
+        while gid < self.slots.len() {
+            let node = self.slots[gid].node;
+            let n_prims = self.slots[gid..]
+                .iter()
+                .take_while(|s| s.node == node)
+                .count();
+            if self.slots[gid].class == Class::Rigid {
+                let mesh = self.desc.nodes[node.index()].mesh.unwrap().0;
+                let mut items = Vec::new();
+                let mut filter = false;
+                for k in 0..n_prims {
+                    let g = self.geometry_data(gid + k, &pose, false);
+                    Self::blas_items((gid + k) as u32, k as u32, &g, &mut items);
+                    filter |= self.alpha_tested[gid + k];
+                    self.rigid_geometry.insert((gid + k) as u32, g);
+                }
+                let blas = by_mesh
+                    .entry(mesh)
+                    .or_insert_with(|| Arc::new(Blas::build(&items, filter)))
+                    .clone();
+                self.rigid.push((node, blas, gid as u32));
+            }
+            gid += n_prims;
+        }
+    }
+
+    /// Builds the frame at time `t` (seconds).
+    pub fn build(&mut self, t: f32) -> FrameScene {
+        let start = std::time::Instant::now();
+        let pose = anim::pose_at(&self.desc, self.anim, t);
+        let mut stats = BuildStats::default();
+        let mut geometry: Vec<Option<GeometryData>> = vec![None; self.slots.len()];
+        let mut instances = Vec::new();
+        if let Some(b) = &self.static_blas {
+            instances.push(Instance::new(b.clone(), Affine3A::IDENTITY).with_geometry_base(0));
+        }
+        for (gid, g) in &self.static_geometry {
+            geometry[*gid as usize] = Some(g.clone());
+        }
+        for (node, blas, base) in &self.rigid {
+            let m = Affine3A::from_mat4(pose.world[node.index()]);
+            instances.push(Instance::new(blas.clone(), m).with_geometry_base(*base));
+        }
+        // Deformed nodes: world-space data and a fresh BLAS per node.
+        let mut gid = 0usize;
+        while gid < self.slots.len() {
+            let node = self.slots[gid].node;
+            let n_prims = self.slots[gid..]
+                .iter()
+                .take_while(|s| s.node == node)
+                .count();
+            if self.slots[gid].class == Class::Deformed {
+                let mut items = Vec::new();
+                let mut filter = false;
+                for k in 0..n_prims {
+                    let g = self.geometry_data(gid + k, &pose, true);
+                    Self::blas_items((gid + k) as u32, k as u32, &g, &mut items);
+                    filter |= self.alpha_tested[gid + k];
+                    geometry[gid + k] = Some(g);
+                }
+                stats.blas_rebuilt += 1;
+                stats.triangles_rebuilt += items.len() as u64;
+                instances.push(
+                    Instance::new(Arc::new(Blas::build(&items, filter)), Affine3A::IDENTITY)
+                        .with_geometry_base(gid as u32),
+                );
+            }
+            gid += n_prims;
+        }
+        // Instance index of each rigid geometry (for world-space light triangles): rigid
+        // instances follow the static one, in `self.rigid` order.
+        let first_rigid = self.static_blas.is_some() as u32;
+        let mut instance_of = vec![0u32; self.slots.len()];
+        for (k, (node, _, base)) in self.rigid.iter().enumerate() {
+            for (g, s) in self.slots.iter().enumerate().skip(*base as usize) {
+                if s.node != *node {
+                    break;
+                }
+                instance_of[g] = first_rigid + k as u32;
+            }
+        }
+        let accel = Accel::new(instances);
+        for (gid, g) in self.rigid_geometry.iter() {
+            geometry[*gid as usize] = Some(g.clone());
+        }
+        let geometry: Vec<GeometryData> = geometry
+            .into_iter()
+            .map(|g| g.expect("every slot has data"))
+            .collect();
+        let bounds = accel.bounds;
+        let (_, radius) = bounds.bounding_sphere();
+
+        // Lights.
+        let mut lights = Vec::new();
+        let mut emissive_base = vec![u32::MAX; geometry.len()];
+        for (gid, g) in geometry.iter().enumerate() {
+            let m = &self.materials[g.material as usize];
+            if m.emissive == Rgb::ZERO {
+                continue;
+            }
+            emissive_base[gid] = lights.len() as u32;
+            let to_world = if g.world_space {
+                Affine3A::IDENTITY
+            } else {
+                accel.instances()[instance_of[gid] as usize].world_from_object
+            };
+            let flip = !g.world_space && to_world.matrix3.determinant() < 0.0;
+            for (k, tri) in g.indices.iter().enumerate() {
+                let [a, b, c] = tri.map(|i| to_world.transform_point3(g.positions[i as usize]));
+                let (e1, e2) = (b - a, c - a);
+                let cr = e1.cross(e2);
+                let area = 0.5 * cr.length();
+                let n = if flip { -cr } else { cr }.normalize_or_zero();
+                lights.push(Light::Triangle {
+                    p0: a,
+                    e1,
+                    e2,
+                    n,
+                    area,
+                    radiance: if area > 0.0 { m.emissive } else { Rgb::ZERO },
+                    two_sided: m.double_sided,
+                    tri: TriRef {
+                        geometry: gid as u32,
+                        triangle: k as u32,
+                    },
+                    instance: instance_of[gid],
+                });
+            }
+        }
+        for (i, node) in self.desc.nodes.iter().enumerate() {
+            let Some(l) = node.light else { continue };
+            let l = &self.desc.lights[l.index()];
+            let m = pose.world[i];
+            let p = m.transform_point3(Vec3::ZERO);
+            let axis = m.transform_vector3(-Vec3::Z).normalize_or_zero();
+            let c = l.color * l.intensity;
+            lights.push(match l.kind {
+                super::desc::LightKind::Point => Light::Point { p, intensity: c },
+                super::desc::LightKind::Spot {
+                    inner_cone,
+                    outer_cone,
+                } => Light::Spot {
+                    p,
+                    axis,
+                    intensity: c,
+                    cos_inner: inner_cone.cos(),
+                    cos_outer: outer_cone.cos(),
+                },
+                super::desc::LightKind::Directional => Light::Directional {
+                    dir: axis,
+                    irradiance: c,
+                },
+            });
+        }
+        let mut environment_light = None;
+        if let Some(env) = self.desc.environment {
+            environment_light = Some(lights.len());
+            lights.push(Light::Environment { radiance: env });
+        }
+        let light_sampler = LightSampler::new(&lights, radius);
+        let camera = self.camera_at(&pose, bounds);
+        stats.instances = accel.instances().len() as u32;
+        stats.seconds = start.elapsed().as_secs_f64();
+        self.last_build = stats;
+        FrameScene {
+            time: t,
+            accel,
+            geometry: Arc::new(geometry),
+            materials: self.materials.clone(),
+            textures: self.textures.clone(),
+            lights,
+            light_sampler,
+            emissive_base,
+            environment: self.desc.environment,
+            environment_light,
+            camera,
+            bounds,
+            scene_radius: radius,
+            alpha_tested: self.alpha_tested.clone(),
+        }
+    }
+
+    fn camera_at(&self, pose: &Pose, bounds: Bounds3) -> Camera {
+        let name = match &self.camera {
+            CameraChoice::First => None,
+            CameraChoice::Named(n) => Some(n.as_str()),
+        };
+        match find_camera(&self.desc, name) {
+            Some((node, cam)) => Camera::new(
+                Affine3A::from_mat4(pose.world[node.index()]),
+                cam.projection,
+                self.width,
+                self.height,
+            ),
+            None => auto_camera(bounds, self.width, self.height),
+        }
+    }
+}
+
+fn camera_nodes(desc: &SceneDesc) -> Vec<(NodeId, &CameraDesc)> {
+    desc.topological_order()
+        .into_iter()
+        .filter_map(|n| {
+            desc.nodes[n.index()]
+                .camera
+                .map(|c| (n, &desc.cameras[c.index()]))
+        })
+        .collect()
+}
+
+fn find_camera<'a>(desc: &'a SceneDesc, name: Option<&str>) -> Option<(NodeId, &'a CameraDesc)> {
+    let cams = camera_nodes(desc);
+    match name {
+        None => cams.into_iter().next(),
+        Some(n) => cams
+            .into_iter()
+            .find(|(node, c)| c.name == n || desc.nodes[node.index()].name == n),
+    }
+}
+
+/// A perspective camera (yfov 40°) on the +Z side of the scene, looking at its centre
+/// from a distance at which the bounding sphere fills the view.
+pub fn auto_camera(bounds: Bounds3, width: u32, height: u32) -> Camera {
+    let (c, r) = bounds.bounding_sphere();
+    let r = if r > 0.0 { r } else { 1.0 };
+    let yfov = 40f32.to_radians();
+    let half = (0.5 * yfov).min(0.5 * yfov * width as f32 / height as f32);
+    let dist = r / half.sin();
+    let eye = c + Vec3::new(0.0, 0.25 * r, dist);
+    let f = (c - eye).normalize();
+    let right = f.cross(Vec3::Y).normalize();
+    let up = right.cross(f);
+    let world_from_camera = Affine3A::from_cols(right.into(), up.into(), (-f).into(), eye.into());
+    Camera::new(
+        world_from_camera,
+        Projection::Perspective {
+            yfov,
+            aspect: None,
+            znear: 0.01,
+        },
+        width,
+        height,
+    )
+}

@@ -1,0 +1,214 @@
+//! Unidirectional path tracing: next-event estimation with multiple importance sampling
+//! (power heuristic), Russian roulette, Owen-scrambled Sobol samples per pixel.
+
+use crate::integrator::{Integrator, RadianceEstimator, RenderedFrame, render_camera_rays};
+use chronolux_core::bsdf::TransportMode;
+use chronolux_core::color::{Rgb, max_component};
+use chronolux_core::geometry::{Ray, spawn_ray, spawn_ray_to};
+use chronolux_core::light::Light;
+use chronolux_core::material;
+use chronolux_core::math::Vec3;
+use chronolux_core::sampling::power_heuristic;
+use chronolux_core::sampling::sampler::PixelSampler;
+use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::stats::Stats;
+
+/// Path tracer settings.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PathSettings {
+    /// Samples per pixel. Default 64.
+    pub spp: u32,
+    /// Longest path in segments from the camera, Mitsuba's `max_depth` convention:
+    /// 1 = emitters seen directly, 2 = direct lighting. `None` = unlimited (Russian
+    /// roulette ends paths). Default `None`.
+    pub max_depth: Option<u32>,
+    /// Path depth (segments) from which Russian roulette may end a path. Default 5
+    /// (Mitsuba's `rr_depth`).
+    pub rr_depth: u32,
+    /// Seed of all sample streams. Default 0.
+    pub seed: u64,
+}
+
+impl Default for PathSettings {
+    fn default() -> Self {
+        PathSettings {
+            spp: 64,
+            max_depth: None,
+            rr_depth: 5,
+            seed: 0,
+        }
+    }
+}
+
+/// Hard cap on path length when `max_depth` is unlimited, so a pathological scene (e.g. a
+/// perfect mirror box) cannot loop forever; Russian roulette ends paths long before it.
+const DEPTH_CAP: u32 = 1024;
+
+#[derive(Clone, Debug, Default)]
+pub struct PathTracer {
+    pub settings: PathSettings,
+}
+
+impl PathTracer {
+    pub fn new(settings: PathSettings) -> Self {
+        PathTracer { settings }
+    }
+}
+
+/// Radiance emitted by a light towards a sampled point, including emission textures.
+fn light_radiance(
+    scene: &FrameScene,
+    light: &Light,
+    li: Rgb,
+    bary: chronolux_core::math::Vec2,
+) -> Rgb {
+    if let Light::Triangle { tri, instance, .. } = light {
+        let g = &scene.geometry[tri.geometry as usize];
+        let m = &scene.materials[g.material as usize];
+        if m.emissive_texture.is_some() {
+            let si = scene.surface_at(*tri, *instance, bary.x, bary.y, None);
+            return material::emission_at(m, &scene.textures, &si.shading);
+        }
+    }
+    li
+}
+
+impl RadianceEstimator for PathTracer {
+    fn li(
+        &self,
+        scene: &FrameScene,
+        camera_ray: &Ray,
+        sampler: &mut PixelSampler,
+        stats: &mut Stats,
+    ) -> Rgb {
+        let max_depth = self.settings.max_depth.unwrap_or(DEPTH_CAP).min(DEPTH_CAP);
+        let mut l = Rgb::ZERO;
+        let mut beta = Rgb::ONE;
+        let mut ray = *camera_ray;
+        // Segments of the current ray from the camera (the camera ray is segment 1).
+        let mut depth = 1u32;
+        let mut specular_bounce = true;
+        let mut prev_pdf = 1.0f32;
+        let mut prev_p = Vec3::ZERO;
+        // Product of η² over refractions, undone for Russian roulette (pbrt's etaScale).
+        let mut eta_scale = 1.0f32;
+        loop {
+            stats.rays += 1;
+            let Some(hit) = scene.intersect(&ray) else {
+                // Escaped: environment light.
+                if let (Some(env), Some(ei)) = (scene.environment, scene.environment_light) {
+                    let w = if specular_bounce {
+                        1.0
+                    } else {
+                        let pl = scene.light_sampler.pmf(ei)
+                            * scene.lights[ei].pdf_li(prev_p, prev_p + ray.d);
+                        power_heuristic(1.0, prev_pdf, 1.0, pl)
+                    };
+                    l += beta * env * w;
+                }
+                break;
+            };
+            let si = scene.interaction(&hit, &ray);
+            let wo = -ray.d.normalize();
+
+            // Emission seen along the path, MIS-weighted against light sampling.
+            let le = scene.emitted(&si, wo);
+            if le != Rgb::ZERO {
+                let w = if specular_bounce {
+                    1.0
+                } else {
+                    match scene.light_of(si.tri) {
+                        Some(li) => {
+                            let pl =
+                                scene.light_sampler.pmf(li) * scene.lights[li].pdf_li(prev_p, si.p);
+                            power_heuristic(1.0, prev_pdf, 1.0, pl)
+                        }
+                        None => 1.0,
+                    }
+                };
+                l += beta * le * w;
+            }
+            if depth >= max_depth {
+                break;
+            }
+
+            let mat = &scene.materials[si.material as usize];
+            let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
+
+            // Next-event estimation. Three dimensions are consumed whether or not they are
+            // used, so each bounce's dimensions stay aligned across samples.
+            let u_light = sampler.next_1d();
+            let u_lp = sampler.next_2d();
+            if bsdf.has_non_delta()
+                && let Some((li_idx, pmf, _)) = scene.light_sampler.sample(u_light)
+            {
+                let light = &scene.lights[li_idx];
+                if let Some(ls) = light.sample_li(si.p, u_lp, scene.scene_radius) {
+                    let f =
+                        bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(si.shading.ns).abs();
+                    if f != Rgb::ZERO {
+                        let shadow = spawn_ray_to(si.p, si.ng, ls.p, ls.n);
+                        stats.shadow_rays += 1;
+                        if !scene.occluded(&shadow) {
+                            let le = light_radiance(scene, light, ls.li, ls.bary);
+                            let w = if ls.is_delta {
+                                1.0
+                            } else {
+                                power_heuristic(1.0, pmf * ls.pdf, 1.0, bsdf.pdf(wo, ls.wi))
+                            };
+                            l += beta * f * le * (w / (pmf * ls.pdf));
+                        }
+                    }
+                }
+            }
+
+            // Continue the path by sampling the BSDF.
+            let u_lobe = sampler.next_1d();
+            let u_dir = sampler.next_2d();
+            let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
+                break;
+            };
+            if bs.weight == Rgb::ZERO {
+                break;
+            }
+            beta *= bs.weight;
+            specular_bounce = bs.is_delta;
+            prev_pdf = bs.pdf;
+            prev_p = si.p;
+            if bs.is_transmission {
+                eta_scale *= bs.eta * bs.eta;
+            }
+            ray = spawn_ray(si.p, si.ng, bs.wi);
+            depth += 1;
+
+            // Possibly terminate the path with Russian roulette.
+            if depth > self.settings.rr_depth {
+                let q = (max_component(beta) * eta_scale).min(0.95);
+                if sampler.next_1d() >= q {
+                    break;
+                }
+                beta /= q;
+            }
+        }
+        l
+    }
+}
+
+impl Integrator for PathTracer {
+    fn render(
+        &self,
+        scene: &FrameScene,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        render_camera_rays(
+            self,
+            scene,
+            frame,
+            self.settings.spp,
+            self.settings.seed,
+            progress,
+        )
+    }
+}

@@ -1,0 +1,39 @@
+//! Frame sequences: the [`SequenceRenderer`] contract and the frame-by-frame wrapper used
+//! by every baseline.
+
+use crate::integrator::{Integrator, RenderedFrame};
+use chronolux_core::scene::frame::FrameScene;
+
+/// Renders the frames of an animation in increasing order; may keep state between frames
+/// (temporal techniques do, baselines do not).
+pub trait SequenceRenderer {
+    /// Short name of the technique (`path`, ...).
+    fn name(&self) -> &'static str;
+    fn render_frame(
+        &mut self,
+        scene: &FrameScene,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame;
+}
+
+/// Every frame rendered from scratch by a single-frame integrator.
+pub struct FrameByFrame<I: Integrator> {
+    pub integrator: I,
+    pub name: &'static str,
+}
+
+impl<I: Integrator> SequenceRenderer for FrameByFrame<I> {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    fn render_frame(
+        &mut self,
+        scene: &FrameScene,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        self.integrator.render(scene, frame, progress)
+    }
+}

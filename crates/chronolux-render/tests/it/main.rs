@@ -1,0 +1,28 @@
+//! The one integration-test binary of chronolux-render: integrators on scenes with
+//! derivable answers.
+
+mod determinism;
+mod furnace;
+
+use chronolux_core::scene::desc::SceneDesc;
+use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};
+use std::sync::Arc;
+
+/// Frame 0 (t = 0) of `desc` at `w`×`h`, first animation clip if any.
+pub fn frame0(desc: SceneDesc, w: u32, h: u32) -> FrameScene {
+    let anim = (!desc.animations.is_empty()).then_some(chronolux_core::scene::desc::AnimationId(0));
+    let mut b = FrameBuilder::new(Arc::new(desc), anim, CameraChoice::First, w, h).unwrap();
+    b.build(0.0)
+}
+
+/// Mean and standard error of the mean over pixels (channel average).
+pub fn mean_and_stderr(px: &[glam::Vec3]) -> (f64, f64) {
+    let v: Vec<f64> = px
+        .iter()
+        .map(|p| ((p.x + p.y + p.z) / 3.0) as f64)
+        .collect();
+    let n = v.len() as f64;
+    let m = v.iter().sum::<f64>() / n;
+    let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0);
+    (m, (var / n).sqrt())
+}

@@ -22,6 +22,14 @@ pub struct TriRef {
     pub triangle: u32,
 }
 
+/// An obvhs ray. Negative zeros in the direction are made positive: obvhs picks the slab
+/// order from `d < 0` but the inverse from the sign bit, so a −0.0 component (e.g. from
+/// negating +Z) would make every box test miss.
+#[inline(always)]
+fn oray(o: Vec3A, d: Vec3A, tmax: f32) -> ORay {
+    ORay::new(o, d + Vec3A::ZERO, 0.0, tmax)
+}
+
 /// A bottom-level structure over triangles in one space.
 pub struct Blas {
     bvh: Option<CwBvh>,
@@ -95,7 +103,7 @@ impl Blas {
         let bvh = self.bvh.as_ref()?;
         let mut best = None;
         let mut hit = RayHit::none();
-        let ray = ORay::new(o, d, 0.0, tmax);
+        let ray = oray(o, d, tmax);
         bvh.ray_traverse(ray, &mut hit, |r, slot| {
             match self.tris[slot].intersect(o, d, r.tmax) {
                 Some((t, b1, b2)) if !self.needs_filter || accept(self.refs[slot], b1, b2) => {
@@ -119,7 +127,7 @@ impl Blas {
         let Some(bvh) = self.bvh.as_ref() else {
             return false;
         };
-        let ray = ORay::new(o, d, 0.0, tmax);
+        let ray = oray(o, d, tmax);
         !bvh.ray_traverse_miss(ray, |r, slot| {
             match self.tris[slot].intersect(o, d, r.tmax) {
                 Some((t, b1, b2)) if !self.needs_filter || accept(self.refs[slot], b1, b2) => t,
@@ -286,7 +294,7 @@ impl Accel {
             Some(tlas) => {
                 let mut best = None;
                 let mut hit = RayHit::none();
-                tlas.ray_traverse(ORay::new(o, d, 0.0, ray.tmax), &mut hit, |r, slot| {
+                tlas.ray_traverse(oray(o, d, ray.tmax), &mut hit, |r, slot| {
                     let i = tlas.primitive_indices[slot] as usize;
                     match local(&self.instances[i], r.tmax) {
                         Some((t, tri, b1, b2)) => {
@@ -332,7 +340,7 @@ impl Accel {
         };
         match &self.tlas {
             None => self.instances.first().is_some_and(|i| local(i, ray.tmax)),
-            Some(tlas) => !tlas.ray_traverse_miss(ORay::new(o, d, 0.0, ray.tmax), |r, slot| {
+            Some(tlas) => !tlas.ray_traverse_miss(oray(o, d, ray.tmax), |r, slot| {
                 if local(
                     &self.instances[tlas.primitive_indices[slot] as usize],
                     r.tmax,
@@ -442,6 +450,49 @@ mod tests {
                 mismatches <= 2,
                 "{mismatches} different triangles at equal t"
             );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tiny_tests {
+    use super::*;
+
+    #[test]
+    fn axis_aligned_rays_with_negative_zero_components_hit() {
+        let q = [
+            Vec3::new(-0.5, -0.5, 0.0),
+            Vec3::new(0.5, -0.5, 0.0),
+            Vec3::new(0.5, 0.5, 0.0),
+            Vec3::new(-0.5, 0.5, 0.0),
+        ];
+        let items = vec![
+            (
+                TriRef {
+                    geometry: 0,
+                    triangle: 0,
+                },
+                [q[0], q[1], q[2]],
+            ),
+            (
+                TriRef {
+                    geometry: 0,
+                    triangle: 1,
+                },
+                [q[0], q[2], q[3]],
+            ),
+        ];
+        let b = Arc::new(Blas::build(&items, false));
+        let a = Accel::new(vec![Instance::new(b, Affine3A::IDENTITY)]);
+        // -Vec3::Z is (-0, -0, -1): a flat quad hit straight on, by an axis-aligned ray.
+        for d in [-Vec3::Z, Vec3::Z, -Vec3::X, Vec3::new(-0.0, 0.0, -1.0)] {
+            let o = Vec3::new(0.1, 0.1, 0.0) - 5.0 * d;
+            let h = a.intersect(&Ray::new(o, d), |_, _, _| true);
+            assert!(
+                h.is_some_and(|h| (h.t - 5.0).abs() < 1e-5) || d == -Vec3::X,
+                "{d}: {h:?}"
+            );
+            assert_eq!(a.occluded(&Ray::new(o, d), |_, _, _| true), d != -Vec3::X);
         }
     }
 }

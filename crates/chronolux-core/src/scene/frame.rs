@@ -694,3 +694,115 @@ pub fn auto_camera(bounds: Bounds3, width: u32, height: u32) -> Camera {
         height,
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::desc::{
+        Animation, Channel, ChannelTarget, Interpolation, Mesh, MeshId, Node, Primitive,
+    };
+
+    /// A unit quad in the XY plane facing +Z, on a node; a second, static quad far behind.
+    fn quad_scene(scale: Vec3, animated: bool) -> SceneDesc {
+        let quad = Primitive {
+            positions: vec![
+                Vec3::new(-0.5, -0.5, 0.0),
+                Vec3::new(0.5, -0.5, 0.0),
+                Vec3::new(0.5, 0.5, 0.0),
+                Vec3::new(-0.5, 0.5, 0.0),
+            ],
+            indices: vec![[0, 1, 2], [0, 2, 3]],
+            ..Default::default()
+        };
+        let mut desc = SceneDesc {
+            nodes: vec![
+                Node {
+                    name: "moving".into(),
+                    mesh: Some(MeshId(0)),
+                    transform: Trs {
+                        scale,
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                },
+                Node {
+                    name: "wall".into(),
+                    mesh: Some(MeshId(0)),
+                    transform: Trs {
+                        translation: Vec3::new(0.0, 0.0, -10.0),
+                        scale: Vec3::splat(100.0),
+                        ..Default::default()
+                    },
+                    ..Default::default()
+                },
+            ],
+            roots: vec![NodeId(0), NodeId(1)],
+            meshes: vec![Mesh {
+                primitives: vec![quad],
+                ..Default::default()
+            }],
+            materials: vec![],
+            ..Default::default()
+        };
+        if animated {
+            desc.animations.push(Animation {
+                name: "slide".into(),
+                channels: vec![Channel {
+                    node: NodeId(0),
+                    target: ChannelTarget::Translation,
+                    interpolation: Interpolation::Linear,
+                    times: vec![0.0, 1.0],
+                    values: vec![0.0, 0.0, 0.0, 2.0, 0.0, 0.0],
+                    components: 3,
+                }],
+            });
+        }
+        desc
+    }
+
+    use crate::scene::desc::Trs;
+
+    #[test]
+    fn rigid_instance_follows_its_animation_and_static_geometry_stays() {
+        let desc = Arc::new(quad_scene(Vec3::ONE, true));
+        let mut b =
+            FrameBuilder::new(desc, Some(AnimationId(0)), CameraChoice::First, 8, 8).unwrap();
+        for (t, x) in [(0.0f32, 0.0f32), (0.5, 1.0), (1.0, 2.0)] {
+            let f = b.build(t);
+            let hit = f
+                .intersect(&Ray::new(Vec3::new(x, 0.0, 5.0), -Vec3::Z))
+                .unwrap();
+            assert!(
+                (hit.t - 5.0).abs() < 1e-5,
+                "t={t}: moving quad not at x={x}"
+            );
+            assert_eq!(f.geometry[hit.tri.geometry as usize].node, NodeId(0));
+            // Just outside the moving quad, the ray reaches the static wall at z = -10.
+            let miss = f
+                .intersect(&Ray::new(Vec3::new(x + 0.6, 0.0, 5.0), -Vec3::Z))
+                .unwrap();
+            assert!((miss.t - 15.0).abs() < 1e-4);
+            assert_eq!(f.geometry[miss.tri.geometry as usize].node, NodeId(1));
+        }
+        assert_eq!(
+            b.last_build.blas_rebuilt, 0,
+            "rigid motion must not rebuild any BLAS"
+        );
+    }
+
+    #[test]
+    fn mirrored_nodes_keep_their_front_face() {
+        // Scale (-1, 1, 1) mirrors the quad; glTF says the winding flips with it, so the
+        // front face still points to +Z (towards where the unmirrored quad faced).
+        for animated in [false, true] {
+            let desc = Arc::new(quad_scene(Vec3::new(-1.0, 1.0, 1.0), animated));
+            let anim = animated.then_some(AnimationId(0));
+            let mut b = FrameBuilder::new(desc, anim, CameraChoice::First, 8, 8).unwrap();
+            let f = b.build(0.0);
+            let ray = Ray::new(Vec3::new(0.1, 0.1, 5.0), -Vec3::Z);
+            let hit = f.intersect(&ray).unwrap();
+            let si = f.interaction(&hit, &ray);
+            assert!(si.ng.z > 0.99, "animated={animated}: ng = {}", si.ng);
+        }
+    }
+}

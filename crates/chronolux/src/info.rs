@@ -1,0 +1,179 @@
+//! `chronolux info`: what a scene contains.
+
+use crate::cli::InfoArgs;
+use crate::scene_input::{self, SceneInput};
+use anyhow::Result;
+use chronolux_core::scene::anim;
+use chronolux_core::scene::desc::{ChannelTarget, Projection};
+use serde::Serialize;
+
+#[derive(Serialize)]
+pub struct AnimationSummary {
+    pub index: usize,
+    pub name: String,
+    pub duration_s: f32,
+    pub channels: usize,
+    /// Target paths animated, e.g. ["translation", "rotation"].
+    pub targets: Vec<&'static str>,
+}
+
+#[derive(Serialize)]
+pub struct SceneSummary {
+    pub source: String,
+    pub name: String,
+    /// Triangles after node instancing.
+    pub triangles: usize,
+    pub meshes: usize,
+    pub mesh_instances: usize,
+    pub materials: usize,
+    pub textures: usize,
+    /// Punctual lights (KHR_lights_punctual).
+    pub punctual_lights: usize,
+    /// Materials with emission (their triangles are area lights).
+    pub emissive_materials: usize,
+    pub environment_light: bool,
+    /// Camera names with their projection.
+    pub cameras: Vec<String>,
+    pub skins: usize,
+    pub animations: Vec<AnimationSummary>,
+    /// Nodes that change under the selected clip (derived from its channels).
+    pub dynamic_nodes: Vec<String>,
+    pub warnings: Vec<String>,
+}
+
+pub fn summarize(s: &SceneInput) -> SceneSummary {
+    let d = &s.desc;
+    let dynamic = anim::dynamic_nodes(d, s.animation);
+    SceneSummary {
+        source: s.source.clone(),
+        name: d.name.clone(),
+        triangles: d.instanced_triangle_count(),
+        meshes: d.meshes.len(),
+        mesh_instances: d.nodes.iter().filter(|n| n.mesh.is_some()).count(),
+        materials: d.materials.len(),
+        textures: d.textures.len(),
+        punctual_lights: d.nodes.iter().filter(|n| n.light.is_some()).count(),
+        emissive_materials: d
+            .materials
+            .iter()
+            .filter(|m| m.emissive != glam::Vec3::ZERO)
+            .count(),
+        environment_light: d.environment.is_some(),
+        cameras: d
+            .cameras
+            .iter()
+            .map(|c| match c.projection {
+                Projection::Perspective { yfov, .. } => {
+                    format!("{} (perspective, yfov {:.1}°)", c.name, yfov.to_degrees())
+                }
+                Projection::Orthographic { xmag, ymag } => {
+                    format!("{} (orthographic, {xmag}×{ymag})", c.name)
+                }
+            })
+            .collect(),
+        skins: d.skins.len(),
+        animations: d
+            .animations
+            .iter()
+            .enumerate()
+            .map(|(i, a)| {
+                let mut targets: Vec<&'static str> = Vec::new();
+                for c in &a.channels {
+                    let t = match c.target {
+                        ChannelTarget::Translation => "translation",
+                        ChannelTarget::Rotation => "rotation",
+                        ChannelTarget::Scale => "scale",
+                        ChannelTarget::Weights => "weights",
+                    };
+                    if !targets.contains(&t) {
+                        targets.push(t);
+                    }
+                }
+                AnimationSummary {
+                    index: i,
+                    name: a.name.clone(),
+                    duration_s: a.duration(),
+                    channels: a.channels.len(),
+                    targets,
+                }
+            })
+            .collect(),
+        dynamic_nodes: d
+            .nodes
+            .iter()
+            .zip(&dynamic)
+            .enumerate()
+            .filter(|(_, (_, dy))| **dy)
+            .map(|(i, (n, _))| {
+                if n.name.is_empty() {
+                    format!("#{i}")
+                } else {
+                    n.name.clone()
+                }
+            })
+            .collect(),
+        warnings: d.warnings.clone(),
+    }
+}
+
+pub fn run(args: InfoArgs) -> Result<()> {
+    let input = scene_input::load(&args.scene)?;
+    let s = summarize(&input);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&s)?);
+        return Ok(());
+    }
+    println!("scene        {} ({})", s.name, s.source);
+    println!(
+        "triangles    {} in {} mesh instances of {} meshes",
+        s.triangles, s.mesh_instances, s.meshes
+    );
+    println!(
+        "materials    {} ({} emissive), {} textures",
+        s.materials, s.emissive_materials, s.textures
+    );
+    println!(
+        "lights       {} punctual, {} emissive materials{}",
+        s.punctual_lights,
+        s.emissive_materials,
+        if s.environment_light {
+            ", default environment"
+        } else {
+            ""
+        }
+    );
+    println!(
+        "cameras      {}",
+        if s.cameras.is_empty() {
+            "none (automatic framing)".into()
+        } else {
+            s.cameras.join(", ")
+        }
+    );
+    println!("skins        {}", s.skins);
+    if s.animations.is_empty() {
+        println!("animations   none (static scene)");
+    }
+    for a in &s.animations {
+        println!(
+            "animation    {}: '{}' {:.3} s, {} channels ({})",
+            a.index,
+            a.name,
+            a.duration_s,
+            a.channels,
+            a.targets.join(", ")
+        );
+    }
+    println!(
+        "dynamic      {}",
+        if s.dynamic_nodes.is_empty() {
+            "no nodes".into()
+        } else {
+            s.dynamic_nodes.join(", ")
+        }
+    );
+    for w in &s.warnings {
+        println!("warning      {w}");
+    }
+    Ok(())
+}

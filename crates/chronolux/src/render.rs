@@ -1,0 +1,265 @@
+//! `chronolux render`: load → frame builder → technique → frames on disk.
+
+use crate::cli::RenderArgs;
+use crate::info;
+use crate::scene_input;
+use anyhow::{Context, Result, bail};
+use chronolux_core::scene::desc::{Projection, SceneDesc};
+use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
+use chronolux_io::image::Image;
+use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
+use chronolux_render::pt::PathSettings;
+use chronolux_render::registry::TechniqueConfig;
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Largest accepted image side and sample count: beyond these a render is almost surely
+/// a typo (and would need more memory or time than any machine of ours has).
+const MAX_SIDE: u32 = 16384;
+const MAX_SPP: u32 = 1 << 20;
+
+/// Parses `A..B`, `A..=B` or `N` into a list of frames.
+pub fn parse_frames(s: &str) -> Result<Vec<u32>> {
+    let s = s.trim();
+    let num = |t: &str| -> Result<u32> {
+        t.trim().parse::<u32>().with_context(|| {
+            format!("invalid frame number '{t}' in --frames '{s}' (expected A..B, A..=B or N)")
+        })
+    };
+    let frames: Vec<u32> = if let Some((a, b)) = s.split_once("..=") {
+        (num(a)?..=num(b)?).collect()
+    } else if let Some((a, b)) = s.split_once("..") {
+        (num(a)?..num(b)?).collect()
+    } else {
+        vec![num(s)?]
+    };
+    if frames.is_empty() {
+        bail!("--frames '{s}' is empty (A..B is half-open: use A..=B to include B)");
+    }
+    Ok(frames)
+}
+
+/// Parses `WxH`.
+pub fn parse_resolution(s: &str) -> Result<(u32, u32)> {
+    let (w, h) = s.split_once(['x', 'X']).with_context(|| {
+        format!("invalid --resolution '{s}' (expected WIDTHxHEIGHT, e.g. 640x360)")
+    })?;
+    let p = |t: &str| {
+        t.trim()
+            .parse::<u32>()
+            .with_context(|| format!("invalid --resolution '{s}' (expected WIDTHxHEIGHT)"))
+    };
+    let (w, h) = (p(w)?, p(h)?);
+    if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
+        bail!("--resolution {w}x{h} out of range (each side 1 to {MAX_SIDE})");
+    }
+    Ok((w, h))
+}
+
+/// Last frame of the clip at `fps`: the frame on (or just before) its last key.
+pub fn last_frame(
+    desc: &SceneDesc,
+    anim: Option<chronolux_core::scene::desc::AnimationId>,
+    fps: f32,
+) -> Option<u32> {
+    let a = anim?;
+    // 1e-3 frames of slack so a last key at exactly 47/24 s maps to frame 47.
+    Some((desc.animations[a.index()].duration() * fps + 1e-3).floor() as u32)
+}
+
+fn default_resolution(desc: &SceneDesc, camera: &CameraChoice) -> (u32, u32) {
+    let cam = match camera {
+        CameraChoice::Named(n) => desc.cameras.iter().find(|c| &c.name == n),
+        CameraChoice::First => desc
+            .topological_order()
+            .into_iter()
+            .find_map(|n| desc.nodes[n.index()].camera)
+            .map(|c| &desc.cameras[c.index()]),
+    };
+    let aspect = match cam.map(|c| c.projection) {
+        Some(Projection::Perspective {
+            aspect: Some(a), ..
+        }) if a > 0.0 && a.is_finite() => a,
+        Some(Projection::Orthographic { xmag, ymag }) if xmag > 0.0 && ymag > 0.0 => xmag / ymag,
+        _ => 1.0,
+    };
+    (512, ((512.0 / aspect).round() as u32).clamp(1, MAX_SIDE))
+}
+
+pub fn run(args: RenderArgs) -> Result<()> {
+    if args.spp == 0 || args.spp > MAX_SPP {
+        bail!("--spp {} out of range (1 to {MAX_SPP})", args.spp);
+    }
+    if !(args.fps > 0.0 && args.fps <= 1000.0) {
+        bail!("--fps {} out of range (0 < fps ≤ 1000)", args.fps);
+    }
+    if args.max_depth == Some(0) {
+        bail!("--max-depth 0 renders nothing (1 shows emitters only, 2 adds direct lighting)");
+    }
+    if !args.exposure.is_finite() {
+        bail!("--exposure must be a finite number of stops");
+    }
+    if let Some(t) = args.threads {
+        if t == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("cannot set up the thread pool")?;
+    }
+    let input = scene_input::load(&args.scene)?;
+    let summary = info::summarize(&input);
+    let last = last_frame(&input.desc, input.animation, args.fps);
+    let frames = match &args.frames {
+        Some(s) => parse_frames(s)?,
+        None => (0..=last.unwrap_or(0)).collect(),
+    };
+    if let Some(last) = last {
+        let max = *frames.iter().max().unwrap();
+        if max > last {
+            bail!(
+                "--frames goes to frame {max}, but the animation ends at frame {last} ({:.3} s at {} fps)",
+                last as f32 / args.fps,
+                args.fps
+            );
+        }
+    }
+    let (w, h) = match &args.resolution {
+        Some(r) => parse_resolution(r)?,
+        None => default_resolution(&input.desc, &input.camera),
+    };
+    let sink = FrameSink::create(&args.output)?;
+    let config = match args.method.as_str() {
+        "path" => TechniqueConfig::Path(PathSettings {
+            spp: args.spp,
+            max_depth: args.max_depth,
+            rr_depth: 5,
+            seed: args.seed,
+        }),
+        m => bail!("unknown --method '{m}'"),
+    };
+    let mut renderer = config.build();
+    let desc = Arc::new(input.desc);
+    let mut builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+
+    let mut manifest = if args.resume {
+        sink.read_manifest().ok().flatten()
+    } else {
+        None
+    }
+    .unwrap_or_default();
+    manifest.chronolux_version = env!("CARGO_PKG_VERSION").into();
+    manifest.command = std::env::args().collect();
+    manifest.settings = serde_json::json!({
+        "technique": config,
+        "resolution": [w, h],
+        "fps": args.fps,
+        "frames": frames,
+        "exposure": args.exposure,
+        "threads": rayon::current_num_threads(),
+        "animation": input.animation.map(|a| desc.animations[a.index()].name.clone()),
+    });
+    manifest.scene = serde_json::to_value(&summary)?;
+
+    let mp = MultiProgress::new();
+    let style = ProgressStyle::with_template("{prefix:>7} [{bar:40}] {pos}/{len} {msg} ETA {eta}")
+        .unwrap()
+        .progress_chars("=> ");
+    let frame_bar = mp.add(ProgressBar::new(frames.len() as u64));
+    frame_bar.set_style(style.clone());
+    frame_bar.set_prefix("frames");
+    let pixel_bar = mp.add(ProgressBar::new((w * h) as u64));
+    pixel_bar.set_style(style);
+    pixel_bar.set_prefix("pixels");
+    let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let say = |s: String| {
+        if interactive {
+            mp.println(s).ok().unwrap_or(())
+        } else {
+            eprintln!("{s}")
+        }
+    };
+
+    say(format!(
+        "rendering {} frame(s) of {} at {w}x{h}, {} spp, method {} into {}",
+        frames.len(),
+        input.source,
+        args.spp,
+        renderer.name(),
+        args.output.display()
+    ));
+    let total = Instant::now();
+    let mut rendered_frames = Vec::new();
+    for &f in &frames {
+        if args.resume && sink.is_complete(f) {
+            say(format!("frame {f}: already complete, skipped (--resume)"));
+            frame_bar.inc(1);
+            rendered_frames.push(f);
+            continue;
+        }
+        let t = f as f32 / args.fps;
+        let start = Instant::now();
+        let scene = builder.build(t);
+        pixel_bar.reset();
+        let out = renderer.render_frame(&scene, f, &|n| pixel_bar.inc(n));
+        if out.invalid_samples > 0 {
+            log::warn!(
+                "frame {f}: {} samples were NaN/Inf and were dropped",
+                out.invalid_samples
+            );
+        }
+        let image = Image {
+            width: out.width,
+            height: out.height,
+            pixels: out.pixels,
+        };
+        sink.write_frame(f, &image, args.exposure)
+            .with_context(|| format!("writing frame {f}"))?;
+        let wall = start.elapsed().as_secs_f64();
+        let rec = FrameRecord {
+            frame: f,
+            time_s: t,
+            wall_s: wall,
+            stats: serde_json::json!({
+                "rays": out.stats.rays,
+                "shadow_rays": out.stats.shadow_rays,
+                "samples": out.stats.samples,
+                "invalid_samples": out.invalid_samples,
+                "build": builder.last_build,
+            }),
+            file_exr: format!("{}.exr", chronolux_io::output::frame_stem(f)),
+            file_png: format!("{}.png", chronolux_io::output::frame_stem(f)),
+        };
+        manifest.frames.retain(|r| r.frame != f);
+        manifest.frames.push(rec);
+        manifest.frames.sort_by_key(|r| r.frame);
+        sink.write_manifest(&manifest)?;
+        frame_bar.inc(1);
+        if !interactive {
+            eprintln!(
+                "frame {f}: {wall:.2} s, {:.2} Mrays/s",
+                (out.stats.rays + out.stats.shadow_rays) as f64 / wall / 1e6
+            );
+        }
+        rendered_frames.push(f);
+    }
+    pixel_bar.finish_and_clear();
+    frame_bar.finish_and_clear();
+    manifest.total_wall_s = total.elapsed().as_secs_f64();
+    sink.write_manifest(&manifest)?;
+    if !args.no_preview && rendered_frames.len() > 1 {
+        match chronolux_io::output::write_preview(&args.output, &rendered_frames, args.fps) {
+            Ok(p) => say(format!("preview: {}", p.display())),
+            Err(e) => eprintln!("warning: no preview written: {e}"),
+        }
+    }
+    say(format!(
+        "done: {} frame(s) in {:.1} s → {}",
+        rendered_frames.len(),
+        total.elapsed().as_secs_f64(),
+        args.output.display()
+    ));
+    Ok(())
+}

@@ -493,15 +493,18 @@ impl Bsdf {
                 (wi, Rgb::ZERO)
             }
         };
-        let li = if l.flip { mirror(li_l) } else { li_l };
-        if li.z == 0.0 {
-            return None;
-        }
-        let wi = self.frame.from_local(li).normalize();
-        if !self.sides_agree(wo, wi, lo, li) {
-            return None;
-        }
         let is_transmission = li_l.z < 0.0;
+        let wi = self
+            .frame
+            .from_local(if l.flip { mirror(li_l) } else { li_l })
+            .normalize();
+        // Evaluate f and pdf on the direction handed out, exactly as `f()`/`pdf()` will (near
+        // the critical angle the Fresnel term is ill-conditioned under rounding).
+        let li = self.frame.to_local(wi);
+        let li_l = if l.flip { mirror(li) } else { li };
+        if li.z == 0.0 || (li_l.z < 0.0) != is_transmission || !self.sides_agree(wo, wi, lo, li) {
+            return None;
+        }
         let eta = if is_transmission { l.eta } else { 1.0 };
         if delta {
             let mut weight = delta_value / p[lobe];

@@ -311,7 +311,7 @@ fn chi2_sampling_matches_pdf_and_pdf_is_normalised() {
     let threshold = 1.0 - (1.0f64 - 0.01).powf(1.0 / configs.len() as f64);
     let mut failures = Vec::new();
     for (k, (name, bsdf, wo)) in configs.iter().enumerate() {
-        let r = chi2_fit(bsdf, *wo, 200_000, k as u64);
+        let r = chi2_fit(bsdf, *wo, 1_000_000, k as u64);
         // Quadrature error of the 31·16 × 61·16 Simpson grid on these lobes (the peakiest
         // is the α = 0.1 conductor): measured < 1e-3; 3e-3 is the allowance.
         let quad_tol = 3e-3;

@@ -141,6 +141,10 @@ fn reads_mitsuba_reference() {
     let img = read_exr(MITSUBA_F00).unwrap();
     assert_eq!((img.width, img.height), (256, 256));
     let mean = img.mean_value();
+    eprintln!(
+        "{MITSUBA_F00}: mean pixel value {mean}, per channel {}",
+        img.mean()
+    );
     assert!(
         (mean - 0.152).abs() <= 0.01,
         "mean pixel value {mean}, README says ≈ 0.152"

@@ -234,9 +234,9 @@ fn preview_gif_has_all_frames() {
 fn preview_downscales_long_side_to_512() {
     let dir = temp_dir("preview-big");
     let mut img = Image::new(1100, 300);
-    // Left half white, right half black: the average in the middle column must be sane.
+    // White up to column 550, black after: output column 256 straddles the edge.
     for y in 0..300 {
-        for x in 0..550 {
+        for x in 0..551 {
             img.set(x, y, Rgb::ONE);
         }
     }
@@ -244,6 +244,28 @@ fn preview_downscales_long_side_to_512() {
     let gif_path = write_preview(&dir, &[7], 12.0).unwrap();
     let (n, w, h, _) = gif_info(&gif_path);
     assert_eq!((n, w, h), (1, 512, 140));
+    // Content survives: white on the left, black on the right, a mix in the middle column.
+    let mut opts = gif::DecodeOptions::new();
+    opts.set_color_output(gif::ColorOutput::RGBA);
+    let mut dec = opts
+        .read_info(std::fs::File::open(&gif_path).unwrap())
+        .unwrap();
+    let frame = dec.read_next_frame().unwrap().unwrap();
+    let px = |x: usize, y: usize| frame.buffer[(y * 512 + x) * 4];
+    assert!(
+        px(10, 70) >= 250 && px(250, 10) >= 250,
+        "{} {}",
+        px(10, 70),
+        px(250, 10)
+    );
+    assert!(
+        px(300, 70) <= 5 && px(511, 139) <= 5,
+        "{} {}",
+        px(300, 70),
+        px(511, 139)
+    );
+    let mid = px(256, 70);
+    assert!((100..=250).contains(&mid), "middle column {mid}");
     std::fs::remove_dir_all(dir).unwrap();
 }
 

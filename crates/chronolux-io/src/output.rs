@@ -341,12 +341,11 @@ impl FrameSink {
         self.dir.join(MANIFEST_NAME)
     }
 
-    /// True when both files of `frame` exist, the PNG is non-empty, and the EXR parses with a
-    /// nonzero size and all its chunks present (compressed chunks are read, not decoded), so a
-    /// truncated EXR counts as incomplete. Used by `--resume`.
+    /// True when both files of `frame` exist, the PNG ends with its `IEND` chunk, and the EXR
+    /// parses with a nonzero size and all its chunks present (compressed chunks are read, not
+    /// decoded), so a truncated file counts as incomplete. Used by `--resume`.
     pub fn is_complete(&self, frame: u32) -> bool {
-        let png_ok = fs::metadata(self.png_path(frame)).is_ok_and(|m| m.is_file() && m.len() > 0);
-        png_ok && exr_is_complete(&self.exr_path(frame))
+        png_is_complete(&self.png_path(frame)) && exr_is_complete(&self.exr_path(frame))
     }
 
     /// Writes `frame_NNNN.exr` (linear) then `frame_NNNN.png` (sRGB, `exposure` stops), each
@@ -379,6 +378,23 @@ impl FrameSink {
             .map(Some)
             .map_err(|source| OutputError::Manifest { path, source })
     }
+}
+
+/// PNG signature at the start and the `IEND` chunk (with its fixed CRC) at the end.
+fn png_is_complete(path: &Path) -> bool {
+    use std::io::{Read, Seek, SeekFrom};
+    const SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+    const IEND: [u8; 12] = [0, 0, 0, 0, b'I', b'E', b'N', b'D', 0xae, 0x42, 0x60, 0x82];
+    let check = || -> io::Result<bool> {
+        let mut f = File::open(path)?;
+        let mut head = [0u8; 8];
+        f.read_exact(&mut head)?;
+        f.seek(SeekFrom::End(-12))?;
+        let mut tail = [0u8; 12];
+        f.read_exact(&mut tail)?;
+        Ok(head == SIGNATURE && tail == IEND)
+    };
+    check().unwrap_or(false)
 }
 
 /// Header parses, every layer has a nonzero size, and every chunk is present and readable.

@@ -92,6 +92,13 @@ fn sink_writes_frames_and_checks_completeness() {
     sink.write_frame(2, &img, 0.0).unwrap();
     std::fs::remove_file(sink.png_path(2)).unwrap();
     assert!(!sink.is_complete(2));
+    // EXR fine but PNG truncated.
+    sink.write_frame(3, &img, 0.0).unwrap();
+    let png = std::fs::read(sink.png_path(3)).unwrap();
+    std::fs::write(sink.png_path(3), &png[..png.len() - 1]).unwrap();
+    assert!(!sink.is_complete(3));
+    std::fs::write(sink.png_path(3), &png).unwrap();
+    assert!(sink.is_complete(3));
 
     std::fs::remove_dir_all(dir.parent().unwrap().parent().unwrap()).unwrap();
 }

@@ -257,3 +257,25 @@ fn png_write_into_missing_folder_is_an_error_naming_the_file() {
     assert!(err.to_string().contains("a.png"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn reads_f16_rgba_exr() {
+    use exr::prelude::f16;
+    let dir = temp_dir("exr-f16");
+    let path = dir.join("half.exr");
+    exr::prelude::write_rgba_file(&path, 5, 3, |x, y| {
+        let v = f16::from_f32(x as f32 * 0.5 + y as f32 * 2.0);
+        (
+            v,
+            f16::from_f32(0.25),
+            f16::from_f32(-1.5),
+            f16::from_f32(0.5),
+        )
+    })
+    .unwrap();
+    let img = read_exr(&path).unwrap();
+    assert_eq!((img.width, img.height), (5, 3));
+    assert_eq!(img.get(3, 2), Rgb::new(5.5, 0.25, -1.5));
+    assert_eq!(img.get(0, 0), Rgb::new(0.0, 0.25, -1.5));
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -1,1 +1,413 @@
-//! (in progress)
+//! Images in and out: linear RGB [`Image`], OpenEXR (linear f32) and 8-bit sRGB PNG.
+//!
+//! - [`write_exr`] / [`read_exr`]: scene-referred linear RGB, channels `R`, `G`, `B` as f32,
+//!   scanline blocks, ZIP (16 lines) compression, which is lossless: a round trip is bit-exact.
+//!   [`read_exr`] also reads f16/f32 RGB(A) files written by other renderers (Mitsuba 3).
+//! - [`tonemap_srgb8`] / [`write_png`]: display-referred 8-bit sRGB, by exposure and a plain
+//!   clamp (no filmic curve), so a PNG value maps one-to-one to an EXR value ≤ 1.
+//! - [`read_png_rgb8`]: 8-bit PNGs back, for tests and comparisons.
+//!
+//! Every write goes through [`crate::output::write_atomic`]: a reader never sees a half-written
+//! file under the final name.
+
+use std::fs::File;
+use std::io::{self, BufReader};
+use std::path::{Path, PathBuf};
+
+use chronolux_core::color::{Rgb, linear_to_srgb, srgb_to_linear};
+
+use crate::output::write_atomic;
+
+/// Errors of image reading and writing. Every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    /// The file could not be written (I/O error or encoder error).
+    #[error("cannot write {path}: {source}")]
+    Write {
+        /// Target file.
+        path: PathBuf,
+        /// Cause; encoder errors are wrapped as [`io::ErrorKind::Other`].
+        source: io::Error,
+    },
+    /// The file could not be opened or read.
+    #[error("cannot read {path}: {source}")]
+    Read {
+        /// File being read.
+        path: PathBuf,
+        /// Cause.
+        source: io::Error,
+    },
+    /// The file is not a valid OpenEXR file or lacks R, G, B channels.
+    #[error("cannot decode EXR {path}: {source}")]
+    Exr {
+        /// File being read.
+        path: PathBuf,
+        /// Cause.
+        source: exr::error::Error,
+    },
+    /// The file is not a valid PNG file.
+    #[error("cannot decode PNG {path}: {source}")]
+    Png {
+        /// File being read.
+        path: PathBuf,
+        /// Cause.
+        source: png::DecodingError,
+    },
+    /// The image has no pixels, or its pixel count does not match its size.
+    #[error("invalid image for {path}: {reason}")]
+    Invalid {
+        /// File concerned.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// A linear, scene-referred RGB image: row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height` pixels, row-major, top row first.
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    /// A black image.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            pixels: vec![Rgb::ZERO; width as usize * height as usize],
+        }
+    }
+
+    /// An image from its pixels (row-major, top row first).
+    ///
+    /// # Panics
+    /// When `pixels.len() != width * height`.
+    pub fn from_pixels(width: u32, height: u32, pixels: Vec<Rgb>) -> Self {
+        assert_eq!(
+            pixels.len(),
+            width as usize * height as usize,
+            "Image::from_pixels: {} pixels for {width}x{height}",
+            pixels.len()
+        );
+        Self {
+            width,
+            height,
+            pixels,
+        }
+    }
+
+    #[inline]
+    fn index(&self, x: u32, y: u32) -> usize {
+        assert!(
+            x < self.width && y < self.height,
+            "pixel ({x}, {y}) outside {}x{}",
+            self.width,
+            self.height
+        );
+        y as usize * self.width as usize + x as usize
+    }
+
+    /// Pixel at column `x`, row `y` (row 0 is the top). Panics outside the image.
+    #[inline]
+    pub fn get(&self, x: u32, y: u32) -> Rgb {
+        self.pixels[self.index(x, y)]
+    }
+
+    /// Sets the pixel at column `x`, row `y`. Panics outside the image.
+    #[inline]
+    pub fn set(&mut self, x: u32, y: u32, c: Rgb) {
+        let i = self.index(x, y);
+        self.pixels[i] = c;
+    }
+
+    /// Per-channel mean over all pixels (accumulated in f64); zero for an empty image.
+    pub fn mean(&self) -> Rgb {
+        if self.pixels.is_empty() {
+            return Rgb::ZERO;
+        }
+        let mut s = [0.0f64; 3];
+        for p in &self.pixels {
+            s[0] += f64::from(p.x);
+            s[1] += f64::from(p.y);
+            s[2] += f64::from(p.z);
+        }
+        let n = self.pixels.len() as f64;
+        Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
+    }
+
+    /// Mean over all pixels and channels (the "mean pixel value" of the reference READMEs).
+    pub fn mean_value(&self) -> f32 {
+        self.mean().element_sum() / 3.0
+    }
+}
+
+fn check_size(path: &Path, image: &Image) -> Result<(), ImageError> {
+    let reason = if image.width == 0 || image.height == 0 {
+        format!("empty image ({}x{})", image.width, image.height)
+    } else if image.pixels.len() != image.width as usize * image.height as usize {
+        format!(
+            "{} pixels for {}x{}",
+            image.pixels.len(),
+            image.width,
+            image.height
+        )
+    } else {
+        return Ok(());
+    };
+    Err(ImageError::Invalid {
+        path: path.to_owned(),
+        reason,
+    })
+}
+
+/// Writes `image` as a linear RGB f32 OpenEXR file (channels R, G, B; scanline blocks, ZIP16,
+/// lossless), atomically.
+pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), ImageError> {
+    use exr::prelude::{Encoding, SpecificChannels, Vec2, WritableImage};
+    let path = path.as_ref();
+    check_size(path, image)?;
+    let width = image.width as usize;
+    let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
+        let p = image.pixels[y * width + x];
+        (p.x, p.y, p.z)
+    });
+    let exr_image = exr::prelude::Image::from_encoded_channels(
+        (width, image.height as usize),
+        Encoding::SMALL_LOSSLESS,
+        channels,
+    );
+    write_atomic(path, |w| {
+        exr_image.write().to_buffered(w).map_err(exr_to_io)
+    })
+    .map_err(|source| ImageError::Write {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+fn exr_to_io(e: exr::error::Error) -> io::Error {
+    match e {
+        exr::error::Error::Io(io) => io,
+        other => io::Error::other(other),
+    }
+}
+
+/// Reads the first RGB(A) layer of an OpenEXR file (f16, f32 or u32 samples) as linear RGB;
+/// alpha is ignored. Reads files written by [`write_exr`] and by Mitsuba 3.
+pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, ImageError> {
+    let path = path.as_ref();
+    let result = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |size, _channels| Image::new(size.width() as u32, size.height() as u32),
+        |img: &mut Image, pos, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let i = pos.y() * img.width as usize + pos.x();
+            img.pixels[i] = Rgb::new(r, g, b);
+        },
+    );
+    match result {
+        Ok(exr_image) => {
+            let image = exr_image.layer_data.channel_data.pixels;
+            check_size(path, &image)?;
+            Ok(image)
+        }
+        Err(exr::error::Error::Io(source)) if source.kind() != io::ErrorKind::UnexpectedEof => {
+            Err(ImageError::Read {
+                path: path.to_owned(),
+                source,
+            })
+        }
+        Err(source) => Err(ImageError::Exr {
+            path: path.to_owned(),
+            source,
+        }),
+    }
+}
+
+/// Display encoding of linear RGB: multiply by `2^exposure`, clamp to [0, 1], apply the sRGB
+/// OETF, round to 8 bits. NaN becomes 0.
+///
+/// There is deliberately no filmic / tone curve: with `exposure = 0`, every EXR value ≤ 1 maps
+/// one-to-one to its PNG value (e.g. linear 0.5 → 188), and values > 1 clip to 255. Use a
+/// negative exposure to bring highlights into range.
+pub fn tonemap_srgb8(image: &Image, exposure: f32) -> Vec<[u8; 3]> {
+    let scale = exposure.exp2();
+    let enc = |v: f32| -> u8 {
+        let v = v * scale;
+        if v.is_nan() {
+            return 0;
+        }
+        (linear_to_srgb(v) * 255.0).round() as u8
+    };
+    image
+        .pixels
+        .iter()
+        .map(|p| [enc(p.x), enc(p.y), enc(p.z)])
+        .collect()
+}
+
+/// Writes `image` as an 8-bit sRGB PNG (RGB, with the `sRGB` chunk, perceptual intent),
+/// encoded by [`tonemap_srgb8`], atomically.
+pub fn write_png(path: impl AsRef<Path>, image: &Image, exposure: f32) -> Result<(), ImageError> {
+    let path = path.as_ref();
+    check_size(path, image)?;
+    let rgb8 = tonemap_srgb8(image, exposure);
+    write_png_rgb8(
+        path,
+        &Rgb8Image {
+            width: image.width,
+            height: image.height,
+            pixels: rgb8,
+        },
+    )
+}
+
+/// Writes an 8-bit sRGB image as a PNG (RGB, with the `sRGB` chunk), atomically.
+pub fn write_png_rgb8(path: impl AsRef<Path>, image: &Rgb8Image) -> Result<(), ImageError> {
+    let path = path.as_ref();
+    if image.width == 0
+        || image.height == 0
+        || image.pixels.len() != image.width as usize * image.height as usize
+    {
+        return Err(ImageError::Invalid {
+            path: path.to_owned(),
+            reason: format!(
+                "{} pixels for {}x{}",
+                image.pixels.len(),
+                image.width,
+                image.height
+            ),
+        });
+    }
+    let bytes = image.pixels.as_flattened();
+    write_atomic(path, |w| {
+        let mut enc = png::Encoder::new(w, image.width, image.height);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        let mut writer = enc.write_header().map_err(png_enc_to_io)?;
+        writer.write_image_data(bytes).map_err(png_enc_to_io)?;
+        writer.finish().map_err(png_enc_to_io)
+    })
+    .map_err(|source| ImageError::Write {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+fn png_enc_to_io(e: png::EncodingError) -> io::Error {
+    match e {
+        png::EncodingError::IoError(io) => io,
+        other => io::Error::other(other),
+    }
+}
+
+/// An 8-bit sRGB-encoded image, row-major, top row first.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Rgb8Image {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// `width * height` pixels.
+    pub pixels: Vec<[u8; 3]>,
+}
+
+impl Rgb8Image {
+    /// Pixel at column `x`, row `y` (row 0 is the top). Panics outside the image.
+    pub fn get(&self, x: u32, y: u32) -> [u8; 3] {
+        assert!(x < self.width && y < self.height);
+        self.pixels[y as usize * self.width as usize + x as usize]
+    }
+
+    /// Decodes the sRGB values back to linear RGB (inverse OETF, no exposure).
+    pub fn to_linear(&self) -> Image {
+        let lut: Vec<f32> = (0..=255u8)
+            .map(|v| srgb_to_linear(f32::from(v) / 255.0))
+            .collect();
+        let pixels = self
+            .pixels
+            .iter()
+            .map(|p| Rgb::new(lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]))
+            .collect();
+        Image {
+            width: self.width,
+            height: self.height,
+            pixels,
+        }
+    }
+}
+
+/// Reads a PNG as 8-bit RGB: palette and grey are expanded, 16-bit is stripped to 8, alpha is
+/// dropped. Values are returned as stored (no colour management).
+pub fn read_png_rgb8(path: impl AsRef<Path>) -> Result<Rgb8Image, ImageError> {
+    let path = path.as_ref();
+    let file = File::open(path).map_err(|source| ImageError::Read {
+        path: path.to_owned(),
+        source,
+    })?;
+    let png_err = |source: png::DecodingError| match source {
+        png::DecodingError::IoError(source) if source.kind() != io::ErrorKind::UnexpectedEof => {
+            ImageError::Read {
+                path: path.to_owned(),
+                source,
+            }
+        }
+        source => ImageError::Png {
+            path: path.to_owned(),
+            source,
+        },
+    };
+    let mut decoder = png::Decoder::new(BufReader::new(file));
+    decoder.set_transformations(png::Transformations::normalize_to_color8());
+    let mut reader = decoder.read_info().map_err(png_err)?;
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| ImageError::Invalid {
+            path: path.to_owned(),
+            reason: "PNG too large".to_owned(),
+        })?;
+    let mut buf = vec![0u8; size];
+    let info = reader.next_frame(&mut buf).map_err(png_err)?;
+    let (w, h) = (info.width, info.height);
+    let n = w as usize * h as usize;
+    let channels = match info.color_type {
+        png::ColorType::Grayscale => 1,
+        png::ColorType::GrayscaleAlpha => 2,
+        png::ColorType::Rgb => 3,
+        png::ColorType::Rgba => 4,
+        png::ColorType::Indexed => {
+            return Err(ImageError::Invalid {
+                path: path.to_owned(),
+                reason: "indexed PNG was not expanded".to_owned(),
+            });
+        }
+    };
+    if info.bit_depth != png::BitDepth::Eight || info.line_size != w as usize * channels {
+        return Err(ImageError::Invalid {
+            path: path.to_owned(),
+            reason: format!(
+                "unexpected PNG layout {:?} {:?}",
+                info.color_type, info.bit_depth
+            ),
+        });
+    }
+    let data = &buf[..n * channels];
+    let pixels = data
+        .chunks_exact(channels)
+        .map(|c| match channels {
+            1 | 2 => [c[0]; 3],
+            _ => [c[0], c[1], c[2]],
+        })
+        .collect();
+    Ok(Rgb8Image {
+        width: w,
+        height: h,
+        pixels,
+    })
+}

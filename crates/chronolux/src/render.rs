@@ -144,15 +144,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let desc = Arc::new(input.desc);
     let mut builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
 
-    let mut manifest = if args.resume {
-        sink.read_manifest().ok().flatten()
-    } else {
-        None
-    }
-    .unwrap_or_default();
-    manifest.chronolux_version = env!("CARGO_PKG_VERSION").into();
-    manifest.command = std::env::args().collect();
-    manifest.settings = serde_json::json!({
+    let settings = serde_json::json!({
         "technique": config,
         "resolution": [w, h],
         "fps": args.fps,
@@ -161,7 +153,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
         "threads": rayon::current_num_threads(),
         "animation": input.animation.map(|a| desc.animations[a.index()].name.clone()),
     });
-    manifest.scene = serde_json::to_value(&summary)?;
+    let mut manifest = Manifest::new(std::env::args().collect(), settings, serde_json::to_value(&summary)?);
+    if args.resume {
+        if let Some(earlier) = sink.read_manifest()? {
+            manifest.merge_earlier(&earlier);
+        }
+    }
 
     let mp = MultiProgress::new();
     let style = ProgressStyle::with_template("{prefix:>7} [{bar:40}] {pos}/{len} {msg} ETA {eta}")
@@ -218,23 +215,19 @@ pub fn run(args: RenderArgs) -> Result<()> {
         sink.write_frame(f, &image, args.exposure)
             .with_context(|| format!("writing frame {f}"))?;
         let wall = start.elapsed().as_secs_f64();
-        let rec = FrameRecord {
-            frame: f,
-            time_s: t,
-            wall_s: wall,
-            stats: serde_json::json!({
+        let rec = FrameRecord::new(
+            f,
+            t,
+            wall,
+            serde_json::json!({
                 "rays": out.stats.rays,
                 "shadow_rays": out.stats.shadow_rays,
                 "samples": out.stats.samples,
                 "invalid_samples": out.invalid_samples,
                 "build": builder.last_build,
             }),
-            file_exr: format!("{}.exr", chronolux_io::output::frame_stem(f)),
-            file_png: format!("{}.png", chronolux_io::output::frame_stem(f)),
-        };
-        manifest.frames.retain(|r| r.frame != f);
-        manifest.frames.push(rec);
-        manifest.frames.sort_by_key(|r| r.frame);
+        );
+        manifest.upsert_frame(rec);
         sink.write_manifest(&manifest)?;
         frame_bar.inc(1);
         if !interactive {
@@ -247,7 +240,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     pixel_bar.finish_and_clear();
     frame_bar.finish_and_clear();
-    manifest.total_wall_s = total.elapsed().as_secs_f64();
+    manifest.finish(total.elapsed().as_secs_f64());
     sink.write_manifest(&manifest)?;
     if !args.no_preview && rendered_frames.len() > 1 {
         match chronolux_io::output::write_preview(&args.output, &rendered_frames, args.fps) {

@@ -436,7 +436,7 @@ impl Loader<'_> {
         };
         let elem_size = col_stride * cols;
         let count = usize::try_from(acc.count.0).unwrap_or(usize::MAX);
-        if count > (1 << 28) {
+        if count.saturating_mul(n) > (1 << 27) {
             return Err(self.invalid(&apath, format!("count {count} is unreasonably large")));
         }
         let normalized = acc.normalized;
@@ -626,6 +626,7 @@ impl Loader<'_> {
                 (0..node_count).filter(|&i| !has_parent[i]).collect()
             }
         };
+        let nodes_vec: Vec<gltf::Node> = doc.nodes().collect();
         let mut map: Vec<Option<u32>> = vec![None; node_count];
         let mut order: Vec<(usize, Option<u32>)> = Vec::new();
         let mut stack: Vec<(usize, Option<u32>)> =
@@ -640,16 +641,14 @@ impl Loader<'_> {
             map[old] = Some(order.len() as u32);
             let new = order.len() as u32;
             order.push((old, parent));
-            let node = doc
-                .nodes()
-                .nth(old)
+            let node = nodes_vec
+                .get(old)
                 .ok_or_else(|| self.invalid(format!("nodes[{old}]"), "missing node"))?;
             let children: Vec<usize> = node.children().map(|c| c.index()).collect();
             for &c in children.iter().rev() {
                 stack.push((c, Some(new)));
             }
         }
-        let nodes_vec: Vec<gltf::Node> = doc.nodes().collect();
         for &(old, parent) in &order {
             let n = &nodes_vec[old];
             let path = format!("nodes[{old}]");
@@ -757,6 +756,12 @@ impl Loader<'_> {
                     ));
                 }
                 let (scale, rotation, translation) = m.to_scale_rotation_translation();
+                // A singular matrix (zero scale) has no defined rotation.
+                let rotation = if rotation.is_finite() {
+                    rotation
+                } else {
+                    Quat::IDENTITY
+                };
                 let trs = Trs {
                     translation,
                     rotation,

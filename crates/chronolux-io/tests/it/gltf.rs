@@ -883,3 +883,25 @@ fn normalized_rotation_output_and_weights() {
             < 1e-3
     );
 }
+
+#[test]
+fn bad_indices_and_singular_matrix_do_not_panic() {
+    let mut v = tiny(&TRI, &[0, 1, 2]);
+    v["extensionsUsed"] = json!(["KHR_lights_punctual"]);
+    v["nodes"][0]["extensions"] = json!({"KHR_lights_punctual": {"light": 5}});
+    assert!(load_json(&v).is_err());
+    let mut v = tiny(&TRI, &[0, 1, 2]);
+    v["nodes"][0]["children"] = json!([0]);
+    let msg = single_line(&load_json(&v).unwrap_err());
+    assert!(msg.contains("nodes[0]"), "{msg}");
+    let mut v = tiny(&TRI, &[0, 1, 2]);
+    v["nodes"][0]["matrix"] = json!([0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 1, 2, 3, 1]);
+    let d = load_json(&v).unwrap();
+    assert!(d.nodes[0].transform.rotation.is_finite());
+    assert_eq!(d.nodes[0].transform.translation, Vec3::new(1.0, 2.0, 3.0));
+    let mut v = tiny(&TRI, &[0, 1, 2]);
+    v["accessors"][0]["count"] = json!(4_000_000_000u64);
+    assert!(load_json(&v).is_err());
+    v["accessors"][0]["bufferView"] = Value::Null;
+    assert!(load_json(&v).is_err());
+}

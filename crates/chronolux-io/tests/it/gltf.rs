@@ -905,3 +905,32 @@ fn bad_indices_and_singular_matrix_do_not_panic() {
     v["accessors"][0]["bufferView"] = Value::Null;
     assert!(load_json(&v).is_err());
 }
+
+#[test]
+fn shared_scenes_fit_the_cornell_stage() {
+    use chronolux_core::scene::stage::{cornell_stage, rest_bounds};
+    for f in [
+        "RiggedSimple.glb",
+        "CornellBox.glb",
+        "InterpolationTest.glb",
+        "AnimatedMorphCube.glb",
+    ] {
+        let content = load_ok(f);
+        let staged = cornell_stage(content);
+        let (lo, hi) = rest_bounds(&staged).unwrap();
+        assert!(
+            lo.cmpge(Vec3::new(-1.0, 0.0, -1.0) - 1e-4).all()
+                && hi.cmple(Vec3::new(1.0, 2.0, 1.0) + 1e-4).all(),
+            "{f}: {lo} {hi}"
+        );
+        assert_eq!(staged.cameras[0].name, "stage_camera");
+        assert_eq!(staged.topological_order().len(), staged.nodes.len());
+        for a in 0..staged.animations.len() {
+            let _ = pose_at(
+                &staged,
+                Some(chronolux_core::scene::desc::AnimationId(a as u32)),
+                0.5,
+            );
+        }
+    }
+}

@@ -1,1 +1,683 @@
-//! (in progress)
+//! Scenes built in code: a Cornell room ([`cornell_box`]), a way to place any scene inside
+//! it ([`cornell_stage`]) and the built-in demo animation ([`demo`]).
+//!
+//! The room spans x, z ∈ [-1, 1], y ∈ [0, 2] (y up); the front (z = +1) is open and the
+//! camera looks down −Z into it from z ≈ 3.9. It is lit only by an emissive quad just below
+//! the ceiling, so [`SceneDesc::environment`] is `None`.
+
+use super::anim::{deform_primitive, pose_at};
+use super::desc::{
+    Animation, CameraDesc, CameraId, Channel, ChannelTarget, Interpolation, LightId, Material,
+    MaterialId, Mesh, MeshId, Node, NodeId, Primitive, Projection, SceneDesc, SkinId, TextureRef,
+    Trs,
+};
+use crate::color::Rgb;
+use crate::math::{Quat, Vec2, Vec3};
+
+/// Half-extent of the room in x and z; the room is `2 * ROOM_HALF` tall.
+pub const ROOM_HALF: f32 = 1.0;
+/// Emitted radiance of the ceiling light (the classic Cornell box spectrum as RGB).
+pub const LIGHT_RADIANCE: Rgb = Rgb::new(17.0, 12.0, 4.0);
+/// Vertical field of view of the stage camera (radians).
+pub const CAMERA_YFOV: f32 = 0.69;
+
+/// A quad p0..p3 (in order around its boundary) as two triangles whose geometric normal and
+/// shading normals equal `normal`.
+fn quad(p: [Vec3; 4], normal: Vec3) -> Primitive {
+    let geometric = (p[1] - p[0]).cross(p[2] - p[0]);
+    let p = if geometric.dot(normal) < 0.0 {
+        [p[0], p[3], p[2], p[1]]
+    } else {
+        p
+    };
+    Primitive {
+        positions: p.to_vec(),
+        normals: Some(vec![normal; 4]),
+        uvs: Some(vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ]),
+        indices: vec![[0, 1, 2], [0, 2, 3]],
+        ..Default::default()
+    }
+}
+
+fn push_mesh(
+    desc: &mut SceneDesc,
+    name: &str,
+    prim: Primitive,
+    material: MaterialId,
+    transform: Trs,
+) -> NodeId {
+    let mesh = MeshId(desc.meshes.len() as u32);
+    desc.meshes.push(Mesh {
+        name: name.into(),
+        primitives: vec![Primitive {
+            material: Some(material),
+            ..prim
+        }],
+        weights: Vec::new(),
+    });
+    let node = NodeId(desc.nodes.len() as u32);
+    desc.nodes.push(Node {
+        name: name.into(),
+        transform,
+        mesh: Some(mesh),
+        ..Default::default()
+    });
+    desc.roots.push(node);
+    node
+}
+
+fn push_material(desc: &mut SceneDesc, m: Material) -> MaterialId {
+    desc.materials.push(m);
+    MaterialId(desc.materials.len() as u32 - 1)
+}
+
+/// The Cornell room: white floor, ceiling and back wall, red left wall, green right wall,
+/// an emissive ceiling quad facing down, and a perspective camera (camera 0) in front of the
+/// open side looking in.
+pub fn cornell_box() -> SceneDesc {
+    let mut d = SceneDesc {
+        name: "cornell_box".into(),
+        ..Default::default()
+    };
+    let white = push_material(&mut d, Material::diffuse("white", Rgb::splat(0.73)));
+    let red = push_material(
+        &mut d,
+        Material::diffuse("red", Rgb::new(0.63, 0.065, 0.05)),
+    );
+    let green = push_material(
+        &mut d,
+        Material::diffuse("green", Rgb::new(0.14, 0.45, 0.09)),
+    );
+    let light = push_material(
+        &mut d,
+        Material {
+            emissive: LIGHT_RADIANCE,
+            ..Material::diffuse("light", Rgb::splat(0.78))
+        },
+    );
+    let (h, top) = (ROOM_HALF, 2.0 * ROOM_HALF);
+    let v = Vec3::new;
+    let id = Trs::default();
+    let floor = quad(
+        [v(-h, 0.0, -h), v(h, 0.0, -h), v(h, 0.0, h), v(-h, 0.0, h)],
+        Vec3::Y,
+    );
+    push_mesh(&mut d, "floor", floor, white, id);
+    let ceiling = quad(
+        [v(-h, top, -h), v(h, top, -h), v(h, top, h), v(-h, top, h)],
+        -Vec3::Y,
+    );
+    push_mesh(&mut d, "ceiling", ceiling, white, id);
+    let back = quad(
+        [v(-h, 0.0, -h), v(h, 0.0, -h), v(h, top, -h), v(-h, top, -h)],
+        Vec3::Z,
+    );
+    push_mesh(&mut d, "back_wall", back, white, id);
+    let left = quad(
+        [v(-h, 0.0, -h), v(-h, 0.0, h), v(-h, top, h), v(-h, top, -h)],
+        Vec3::X,
+    );
+    push_mesh(&mut d, "left_wall", left, red, id);
+    let right = quad(
+        [v(h, 0.0, -h), v(h, 0.0, h), v(h, top, h), v(h, top, -h)],
+        -Vec3::X,
+    );
+    push_mesh(&mut d, "right_wall", right, green, id);
+    // Light: the classic 130 × 105 of a 556 room, 1 % of the height below the ceiling.
+    let (lx, lz, ly) = (0.235 * h, 0.19 * h, top - 0.01 * top);
+    let lamp = quad(
+        [
+            v(-lx, ly, -lz),
+            v(lx, ly, -lz),
+            v(lx, ly, lz),
+            v(-lx, ly, lz),
+        ],
+        -Vec3::Y,
+    );
+    push_mesh(&mut d, "ceiling_light", lamp, light, id);
+    d.cameras.push(CameraDesc {
+        name: "stage_camera".into(),
+        projection: Projection::Perspective {
+            yfov: CAMERA_YFOV,
+            aspect: Some(1.0),
+            znear: 0.01,
+        },
+    });
+    let cam = NodeId(d.nodes.len() as u32);
+    d.nodes.push(Node {
+        name: "stage_camera".into(),
+        transform: Trs {
+            translation: Vec3::new(0.0, h, h + 2.9 * h),
+            ..Default::default()
+        },
+        camera: Some(CameraId(0)),
+        ..Default::default()
+    });
+    d.roots.push(cam);
+    d
+}
+
+/// Axis-aligned bounds of all mesh vertices of `desc` at its rest pose, in world space
+/// (`None` when there is no vertex).
+pub fn rest_bounds(desc: &SceneDesc) -> Option<(Vec3, Vec3)> {
+    let pose = pose_at(desc, None, 0.0);
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for id in desc.topological_order() {
+        let node = &desc.nodes[id.index()];
+        let Some(m) = node.mesh else { continue };
+        let world = pose.world[id.index()];
+        for prim in &desc.meshes[m.index()].primitives {
+            let skinned =
+                node.skin.is_some() && prim.joints.is_some() && prim.joint_weights.is_some();
+            let pts: Vec<Vec3> = match deform_primitive(desc, id, prim, &pose) {
+                Some((p, _)) if skinned => p,
+                Some((p, _)) => p.iter().map(|&q| world.transform_point3(q)).collect(),
+                None => prim
+                    .positions
+                    .iter()
+                    .map(|&q| world.transform_point3(q))
+                    .collect(),
+            };
+            for p in pts.into_iter().filter(|p| p.is_finite()) {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+    }
+    (lo.x <= hi.x).then_some((lo, hi))
+}
+
+/// Puts `content` inside the Cornell room: a new root node (`"stage"`) with a uniform scale
+/// (largest extent → 60 % of the room size) and a translation (centred in x and z, standing
+/// on the floor) parents the content's roots. All content ids are offset; its meshes,
+/// materials, textures, lights, skins, animations (retargeted), cameras (after the stage
+/// camera, which stays camera 0) and warnings are kept. The room's lighting replaces the
+/// content's `environment` (the stage is lit by its ceiling quad and the content's lights).
+pub fn cornell_stage(content: SceneDesc) -> SceneDesc {
+    let mut d = cornell_box();
+    d.name = content.name.clone();
+    let (scale, translation) = match rest_bounds(&content) {
+        Some((lo, hi)) => {
+            let extent = (hi - lo).max_element();
+            let s = if extent > 0.0 {
+                0.6 * 2.0 * ROOM_HALF / extent
+            } else {
+                1.0
+            };
+            let c = 0.5 * (lo + hi);
+            (
+                s,
+                Vec3::new(-c.x * s, -lo.y * s + 1e-3 * ROOM_HALF, -c.z * s),
+            )
+        }
+        None => (1.0, Vec3::ZERO),
+    };
+    let stage = NodeId(d.nodes.len() as u32);
+    let node_off = stage.0 + 1;
+    let mesh_off = d.meshes.len() as u32;
+    let mat_off = d.materials.len() as u32;
+    let tex_off = d.textures.len() as u32;
+    let light_off = d.lights.len() as u32;
+    let cam_off = d.cameras.len() as u32;
+    let skin_off = d.skins.len() as u32;
+    let nid = |n: NodeId| NodeId(n.0 + node_off);
+    d.nodes.push(Node {
+        name: "stage".into(),
+        transform: Trs {
+            translation,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::splat(scale),
+        },
+        children: content.roots.iter().map(|&r| nid(r)).collect(),
+        ..Default::default()
+    });
+    d.roots.push(stage);
+    for n in content.nodes {
+        d.nodes.push(Node {
+            parent: Some(n.parent.map_or(stage, nid)),
+            children: n.children.iter().map(|&c| nid(c)).collect(),
+            mesh: n.mesh.map(|m| MeshId(m.0 + mesh_off)),
+            camera: n.camera.map(|c| CameraId(c.0 + cam_off)),
+            light: n.light.map(|l| LightId(l.0 + light_off)),
+            skin: n.skin.map(|s| SkinId(s.0 + skin_off)),
+            ..n
+        });
+    }
+    d.meshes.extend(content.meshes.into_iter().map(|mut m| {
+        for p in &mut m.primitives {
+            p.material = p.material.map(|x| MaterialId(x.0 + mat_off));
+        }
+        m
+    }));
+    let tex = |t: Option<TextureRef>| {
+        t.map(|t| TextureRef {
+            texture: super::desc::TextureId(t.texture.0 + tex_off),
+            ..t
+        })
+    };
+    d.materials
+        .extend(content.materials.into_iter().map(|m| Material {
+            base_color_texture: tex(m.base_color_texture),
+            metallic_roughness_texture: tex(m.metallic_roughness_texture),
+            emissive_texture: tex(m.emissive_texture),
+            normal_texture: tex(m.normal_texture),
+            transmission_texture: tex(m.transmission_texture),
+            ..m
+        }));
+    d.textures.extend(content.textures);
+    d.lights.extend(content.lights);
+    d.cameras.extend(content.cameras);
+    d.skins.extend(content.skins.into_iter().map(|mut s| {
+        s.joints.iter_mut().for_each(|j| *j = nid(*j));
+        s
+    }));
+    d.animations
+        .extend(content.animations.into_iter().map(|mut a| {
+            a.channels.iter_mut().for_each(|c| c.node = nid(c.node));
+            a
+        }));
+    d.warnings.extend(content.warnings);
+    d
+}
+
+/// A cube of half-size `h` centred at the origin, 24 vertices with face normals.
+pub fn cube_primitive(h: f32) -> Primitive {
+    let mut prim = Primitive::default();
+    let (mut normals, mut uvs) = (Vec::new(), Vec::new());
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let mut n = Vec3::ZERO;
+            n[axis] = sign;
+            let (u, v) = (Vec3::new(n.y, n.z, n.x), Vec3::new(n.z, n.x, n.y));
+            let c = n * h;
+            let q = quad(
+                [
+                    c - (u + v) * h,
+                    c + (u - v) * h,
+                    c + (u + v) * h,
+                    c + (v - u) * h,
+                ],
+                n,
+            );
+            let base = prim.positions.len() as u32;
+            prim.positions.extend(q.positions);
+            normals.extend(q.normals.unwrap_or_default());
+            uvs.extend(q.uvs.unwrap_or_default());
+            prim.indices
+                .extend(q.indices.iter().map(|t| t.map(|i| i + base)));
+        }
+    }
+    Primitive {
+        normals: Some(normals),
+        uvs: Some(uvs),
+        ..prim
+    }
+}
+
+/// A UV sphere of `radius` centred at the origin with `segments` longitudes and `rings`
+/// latitudes (2·segments·(rings−1) triangles), unit normals and UVs.
+pub fn uv_sphere(radius: f32, segments: u32, rings: u32) -> Primitive {
+    let (segments, rings) = (segments.max(3), rings.max(2));
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    let mut uvs = Vec::new();
+    for r in 0..=rings {
+        let v = r as f32 / rings as f32;
+        let theta = v * std::f32::consts::PI;
+        for s in 0..=segments {
+            let u = s as f32 / segments as f32;
+            let phi = u * std::f32::consts::TAU;
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
+            positions.push(n * radius);
+            normals.push(n);
+            uvs.push(Vec2::new(u, v));
+        }
+    }
+    let row = segments + 1;
+    let mut indices = Vec::new();
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b, c, e) = (
+                r * row + s,
+                r * row + s + 1,
+                (r + 1) * row + s + 1,
+                (r + 1) * row + s,
+            );
+            // Counter-clockwise seen from outside; the pole rows have one triangle per quad.
+            if r != 0 {
+                indices.push([a, e, b]);
+            }
+            if r != rings - 1 {
+                indices.push([b, e, c]);
+            }
+        }
+    }
+    Primitive {
+        positions,
+        normals: Some(normals),
+        uvs: Some(uvs),
+        indices,
+        ..Default::default()
+    }
+}
+
+/// Duration of the demo clip in seconds (48 frames at 24 fps).
+pub const DEMO_DURATION: f32 = 2.0;
+
+/// The built-in demo: the Cornell room with a glossy cube sliding and turning across the
+/// floor (LINEAR keys over 2 s), a rough-metal sphere and a glass sphere; static camera; one
+/// clip named `"demo"` lasting exactly [`DEMO_DURATION`].
+pub fn demo() -> SceneDesc {
+    let mut d = cornell_box();
+    d.name = "demo".into();
+    let glossy = push_material(
+        &mut d,
+        Material {
+            name: "glossy_orange".into(),
+            base_color: Rgb::new(0.8, 0.35, 0.08),
+            metallic: 0.0,
+            roughness: 0.35,
+            double_sided: false,
+            ..Default::default()
+        },
+    );
+    let metal = push_material(
+        &mut d,
+        Material {
+            name: "metal".into(),
+            base_color: Rgb::new(0.95, 0.93, 0.88),
+            metallic: 1.0,
+            roughness: 0.3,
+            ..Default::default()
+        },
+    );
+    let glass = push_material(
+        &mut d,
+        Material {
+            name: "glass".into(),
+            base_color: Rgb::ONE,
+            metallic: 0.0,
+            roughness: 0.0,
+            transmission: 1.0,
+            ior: 1.5,
+            ..Default::default()
+        },
+    );
+    let r = 0.35 * ROOM_HALF;
+    let at = |p: Vec3| Trs {
+        translation: p,
+        ..Default::default()
+    };
+    let half = 0.2 * ROOM_HALF;
+    let y0 = half;
+    let cube = push_mesh(
+        &mut d,
+        "sliding_cube",
+        cube_primitive(half),
+        glossy,
+        at(Vec3::new(-0.6, y0, 0.35) * ROOM_HALF),
+    );
+    push_mesh(
+        &mut d,
+        "metal_sphere",
+        uv_sphere(r, 32, 24),
+        metal,
+        at(Vec3::new(-0.45, 0.35, -0.4) * ROOM_HALF),
+    );
+    push_mesh(
+        &mut d,
+        "glass_sphere",
+        uv_sphere(r, 32, 24),
+        glass,
+        at(Vec3::new(0.45, 0.35, -0.35) * ROOM_HALF),
+    );
+    let times = vec![0.0, 0.5 * DEMO_DURATION, DEMO_DURATION];
+    let xs = [-0.6f32, 0.0, 0.6];
+    let translation: Vec<f32> = xs
+        .iter()
+        .flat_map(|&x| [x * ROOM_HALF, y0, 0.35 * ROOM_HALF])
+        .collect();
+    let rotation: Vec<f32> = [0.0f32, 0.25, 0.5]
+        .iter()
+        .flat_map(|&turn| {
+            let q = Quat::from_rotation_y(turn * std::f32::consts::PI);
+            [q.x, q.y, q.z, q.w]
+        })
+        .collect();
+    d.animations.push(Animation {
+        name: "demo".into(),
+        channels: vec![
+            Channel {
+                node: cube,
+                target: ChannelTarget::Translation,
+                interpolation: Interpolation::Linear,
+                times: times.clone(),
+                values: translation,
+                components: 3,
+            },
+            Channel {
+                node: cube,
+                target: ChannelTarget::Rotation,
+                interpolation: Interpolation::Linear,
+                times,
+                values: rotation,
+                components: 4,
+            },
+        ],
+    });
+    d
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::desc::{AnimationId, Skin};
+
+    /// A small content scene: two nodes (parent translated far away, child with a mesh),
+    /// a material, an animation on the child.
+    fn content() -> SceneDesc {
+        let mut c = SceneDesc {
+            name: "content".into(),
+            ..Default::default()
+        };
+        c.materials.push(Material::diffuse("m", Rgb::splat(0.5)));
+        c.meshes.push(Mesh {
+            name: "box".into(),
+            primitives: vec![Primitive {
+                material: Some(MaterialId(0)),
+                ..cube_primitive(3.0)
+            }],
+            weights: vec![],
+        });
+        c.nodes.push(Node {
+            name: "parent".into(),
+            children: vec![NodeId(1)],
+            transform: Trs {
+                translation: Vec3::new(100.0, -50.0, 7.0),
+                ..Default::default()
+            },
+            ..Default::default()
+        });
+        c.nodes.push(Node {
+            name: "child".into(),
+            parent: Some(NodeId(0)),
+            mesh: Some(MeshId(0)),
+            transform: Trs {
+                scale: Vec3::new(1.0, 2.0, 1.0),
+                ..Default::default()
+            },
+            ..Default::default()
+        });
+        c.roots.push(NodeId(0));
+        c.skins.push(Skin {
+            name: "s".into(),
+            joints: vec![NodeId(1)],
+            inverse_bind_matrices: vec![crate::math::Mat4::IDENTITY],
+        });
+        c.animations.push(Animation {
+            name: "spin".into(),
+            channels: vec![Channel {
+                node: NodeId(1),
+                target: ChannelTarget::Translation,
+                interpolation: Interpolation::Linear,
+                times: vec![0.0, 1.0],
+                values: vec![0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+                components: 3,
+            }],
+        });
+        c
+    }
+
+    #[test]
+    fn stage_fits_content_inside_room() {
+        let staged = cornell_stage(content());
+        let room = cornell_box();
+        let content_nodes = room.nodes.len() + 1..staged.nodes.len();
+        let pose = pose_at(&staged, None, 0.0);
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for i in content_nodes {
+            if let Some(m) = staged.nodes[i].mesh {
+                for p in &staged.meshes[m.index()].primitives {
+                    for &q in &p.positions {
+                        let w = pose.world[i].transform_point3(q);
+                        lo = lo.min(w);
+                        hi = hi.max(w);
+                    }
+                }
+            }
+        }
+        assert!(lo.x >= -1.0 && lo.z >= -1.0 && lo.y >= 0.0, "{lo}");
+        assert!(hi.x <= 1.0 && hi.z <= 1.0 && hi.y <= 2.0, "{hi}");
+        assert!((lo.y - 1e-3).abs() < 1e-4, "stands on the floor: {lo}");
+        assert!(
+            ((hi - lo).max_element() - 1.2).abs() < 1e-4,
+            "60 % of the room: {}",
+            (hi - lo).max_element()
+        );
+        assert!(
+            (lo.x + hi.x).abs() < 1e-4 && (lo.z + hi.z).abs() < 1e-4,
+            "centred"
+        );
+        assert!(matches!(
+            staged.cameras[0].projection,
+            Projection::Perspective { .. }
+        ));
+        assert_eq!(staged.cameras[0].name, "stage_camera");
+    }
+
+    #[test]
+    fn stage_remaps_ids_consistently() {
+        let staged = cornell_stage(content());
+        let n = staged.nodes.len();
+        for (i, node) in staged.nodes.iter().enumerate() {
+            assert!(
+                node.parent.is_none_or(|p| p.index() < n
+                    && staged.nodes[p.index()].children.contains(&NodeId(i as u32)))
+            );
+            assert!(
+                node.children
+                    .iter()
+                    .all(|c| c.index() < n
+                        && staged.nodes[c.index()].parent == Some(NodeId(i as u32)))
+            );
+            assert!(node.mesh.is_none_or(|m| m.index() < staged.meshes.len()));
+            assert!(node.camera.is_none_or(|c| c.index() < staged.cameras.len()));
+            assert!(node.light.is_none_or(|l| l.index() < staged.lights.len()));
+            assert!(node.skin.is_none_or(|s| s.index() < staged.skins.len()));
+        }
+        for m in &staged.meshes {
+            for p in &m.primitives {
+                assert!(
+                    p.material
+                        .is_none_or(|x| x.index() < staged.materials.len())
+                );
+            }
+        }
+        assert_eq!(
+            staged.topological_order().len(),
+            n,
+            "every node reachable exactly once"
+        );
+        let child = staged.nodes.iter().position(|x| x.name == "child").unwrap();
+        assert_eq!(staged.animations[0].channels[0].node, NodeId(child as u32));
+        assert_eq!(staged.skins[0].joints, vec![NodeId(child as u32)]);
+        assert_eq!(
+            staged.meshes[staged.nodes[child].mesh.unwrap().index()].name,
+            "box"
+        );
+        // The animation still moves the child (by the stage scale).
+        let a = pose_at(&staged, Some(AnimationId(0)), 0.0).world[child].w_axis;
+        let b = pose_at(&staged, Some(AnimationId(0)), 1.0).world[child].w_axis;
+        assert!((b - a).length() > 0.01);
+    }
+
+    #[test]
+    fn demo_is_two_seconds_and_well_formed() {
+        let d = demo();
+        assert_eq!(d.animations.len(), 1);
+        assert_eq!(d.animations[0].name, "demo");
+        assert_eq!(d.animations[0].duration(), 2.0);
+        assert_eq!(d.find_animation("demo"), Some(AnimationId(0)));
+        let sphere = d.meshes.iter().find(|m| m.name == "glass_sphere").unwrap();
+        let tris = sphere.primitives[0].indices.len();
+        assert!((1000..=2000).contains(&tris), "{tris}");
+        let (lo, hi) = rest_bounds(&d).unwrap();
+        assert!(
+            lo.cmpge(Vec3::new(-1.0, 0.0, -1.0) - 1e-5).all()
+                && hi.cmple(Vec3::new(1.0, 2.0, 1.0) + 1e-5).all()
+        );
+        // The cube stays inside the room during the clip.
+        for f in 0..=48 {
+            let pose = pose_at(&d, Some(AnimationId(0)), f as f32 / 24.0);
+            let cube = d
+                .nodes
+                .iter()
+                .position(|n| n.name == "sliding_cube")
+                .unwrap();
+            for &p in &d.meshes[d.nodes[cube].mesh.unwrap().index()].primitives[0].positions {
+                let w = pose.world[cube].transform_point3(p);
+                assert!(w.x.abs() <= 1.0 && w.z.abs() <= 1.0 && w.y >= -1e-5, "{w}");
+            }
+        }
+    }
+
+    #[test]
+    fn room_normals_face_inward() {
+        let d = cornell_box();
+        for m in &d.meshes {
+            let p = &m.primitives[0];
+            for t in &p.indices {
+                let [a, b, c] = t.map(|i| p.positions[i as usize]);
+                let n = (b - a).cross(c - a).normalize();
+                assert!(
+                    n.dot(p.normals.as_ref().unwrap()[t[0] as usize]) > 0.99,
+                    "{}",
+                    m.name
+                );
+                // Inward: towards the room centre.
+                assert!(n.dot(Vec3::new(0.0, 1.0, 0.0) - a) > 0.0, "{}", m.name);
+            }
+        }
+    }
+
+    #[test]
+    fn sphere_normals_point_outward_and_match_winding() {
+        let s = uv_sphere(1.0, 16, 8);
+        for t in &s.indices {
+            let [a, b, c] = t.map(|i| s.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            assert!(n.length() > 0.0);
+            assert!(n.dot(a + b + c) > 0.0);
+        }
+    }
+}

@@ -23,6 +23,13 @@ pub enum Command {
     Render(RenderArgs),
     /// Print what a scene contains: geometry, materials, lights, cameras, animations.
     Info(InfoArgs),
+    /// Compare a rendered frame sequence with a reference sequence: relMSE, FLIP, flicker.
+    Compare(crate::compare::CompareArgs),
+    /// Render converged reference frames, progressively, until their estimated error is
+    /// below a target.
+    Reference(crate::reference::ReferenceArgs),
+    /// Measure speed: ray casting, BVH builds, path samples, equal-quality comparisons.
+    Bench(crate::bench::BenchArgs),
 }
 
 /// Which scene and how to present it; shared by every subcommand that loads a scene.

@@ -1,7 +1,10 @@
 //! `chronolux`: the command line. Arguments and wiring only; no algorithms live here.
 
+mod bench;
 mod cli;
+mod compare;
 mod info;
+mod reference;
 mod render;
 mod scene_input;
 
@@ -15,6 +18,9 @@ fn main() {
     let result = match args.command {
         cli::Command::Render(r) => render::run(r),
         cli::Command::Info(i) => info::run(i),
+        cli::Command::Compare(c) => compare::run(c),
+        cli::Command::Reference(r) => reference::run(r),
+        cli::Command::Bench(b) => bench::run(b),
     };
     if let Err(e) = result {
         // One line, the whole cause chain.

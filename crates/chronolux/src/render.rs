@@ -153,7 +153,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
         "threads": rayon::current_num_threads(),
         "animation": input.animation.map(|a| desc.animations[a.index()].name.clone()),
     });
-    let mut manifest = Manifest::new(std::env::args().collect(), settings, serde_json::to_value(&summary)?);
+    let mut manifest = Manifest::new(
+        std::env::args().collect(),
+        settings,
+        serde_json::to_value(&summary)?,
+    );
     if args.resume {
         if let Some(earlier) = sink.read_manifest()? {
             manifest.merge_earlier(&earlier);

@@ -14,6 +14,8 @@ pub struct RenderedFrame {
     pub width: u32,
     pub height: u32,
     pub pixels: Vec<Rgb>,
+    /// Estimated variance of each pixel value (of the mean over its samples), per channel.
+    pub variance: Vec<Rgb>,
     pub stats: Stats,
     /// Samples dropped because their value was NaN or infinite (should be 0).
     pub invalid_samples: u64,
@@ -103,6 +105,7 @@ pub fn render_camera_rays<E: RadianceEstimator>(
         width: w,
         height: h,
         pixels: film.pixels(),
+        variance: film.variance_of_mean(),
         stats,
         invalid_samples: invalid,
     }

@@ -3,6 +3,7 @@
 
 mod determinism;
 mod furnace;
+mod peer;
 
 use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};

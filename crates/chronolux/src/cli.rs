@@ -59,7 +59,7 @@ pub struct RenderArgs {
     /// Frames to render: `A..B` (half-open, as in Rust), `A..=B` (inclusive) or `N`.
     /// Frame f is shown at time f/fps. Default: every frame of the clip, 0 through the
     /// frame of its last key (a scene without animation: frame 0).
-    #[arg(long, value_name = "RANGE")]
+    #[arg(long, value_name = "RANGE", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Frames per second of the animation timeline (above 0, at most 1000).
     #[arg(
@@ -74,7 +74,7 @@ pub struct RenderArgs {
     pub spp: u32,
     /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384). Default: 512 wide, height
     /// from the camera's aspect ratio (square when the camera gives none).
-    #[arg(long, value_name = "WxH")]
+    #[arg(long, value_name = "WxH", allow_hyphen_values = true)]
     pub resolution: Option<String>,
     /// Longest light path in segments from the camera, as Mitsuba's max_depth: 1 shows
     /// emitters only, 2 adds direct lighting. Default: unlimited (Russian roulette ends paths).

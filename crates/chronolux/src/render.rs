@@ -126,6 +126,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             );
         }
     }
+    if input.animation.is_none() && frames.len() > 1 {
+        log::warn!(
+            "{} has no animation: the {} frames will be identical",
+            input.source,
+            frames.len()
+        );
+    }
     let (w, h) = match requested_resolution {
         Some(r) => r,
         None => default_resolution(&input.desc, &input.camera),
@@ -211,58 +218,63 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut rendered_frames = Vec::new();
     let n = frames.len();
     let width = n.to_string().len();
-    for (k, &f) in frames.iter().enumerate() {
-        if args.resume && sink.is_complete(f) {
-            say(format!(
-                "frame {f} [{:>width$}/{n}]: already complete, skipped (--resume)",
-                k + 1
-            ));
-            frame_bar.inc(1);
-            rendered_frames.push(f);
-            continue;
-        }
-        let t = f as f32 / args.fps;
-        let start = Instant::now();
-        let scene = builder.build(t);
-        pixel_bar.reset();
-        let out = renderer.render_frame(&scene, f, &|n| pixel_bar.inc(n));
-        let image = Image {
-            width: out.width,
-            height: out.height,
-            pixels: out.pixels,
-        };
-        sink.write_frame(f, &image, args.exposure)
-            .with_context(|| format!("writing frame {f}"))?;
-        let wall = start.elapsed().as_secs_f64();
-        let rec = FrameRecord::new(
-            f,
-            t,
-            wall,
-            serde_json::json!({
-                "rays": out.stats.rays,
-                "shadow_rays": out.stats.shadow_rays,
-                "samples": out.stats.samples,
-                "invalid_samples": out.invalid_samples,
-                "build": builder.last_build,
-            }),
-        );
-        manifest.upsert_frame(rec);
-        sink.write_manifest(&manifest)?;
-        frame_bar.inc(1);
-        say(format!(
-            "frame {f} [{:>width$}/{n}] t={t:.3} s: {wall:.2} s, {:.2} Mrays/s{}",
-            k + 1,
-            (out.stats.rays + out.stats.shadow_rays) as f64 / wall.max(1e-9) / 1e6,
-            if out.invalid_samples > 0 {
-                format!(", {} NaN/Inf samples dropped", out.invalid_samples)
-            } else {
-                String::new()
+    // The bars are cleared whatever happens, so that an error line is not drawn over.
+    let result = (|| -> Result<()> {
+        for (k, &f) in frames.iter().enumerate() {
+            if args.resume && sink.is_complete(f) {
+                say(format!(
+                    "frame {f} [{:>width$}/{n}]: already complete, skipped (--resume)",
+                    k + 1
+                ));
+                frame_bar.inc(1);
+                rendered_frames.push(f);
+                continue;
             }
-        ));
-        rendered_frames.push(f);
-    }
+            let t = f as f32 / args.fps;
+            let start = Instant::now();
+            let scene = builder.build(t);
+            pixel_bar.reset();
+            let out = renderer.render_frame(&scene, f, &|n| pixel_bar.inc(n));
+            let image = Image {
+                width: out.width,
+                height: out.height,
+                pixels: out.pixels,
+            };
+            sink.write_frame(f, &image, args.exposure)
+                .with_context(|| format!("writing frame {f}"))?;
+            let wall = start.elapsed().as_secs_f64();
+            let rec = FrameRecord::new(
+                f,
+                t,
+                wall,
+                serde_json::json!({
+                    "rays": out.stats.rays,
+                    "shadow_rays": out.stats.shadow_rays,
+                    "samples": out.stats.samples,
+                    "invalid_samples": out.invalid_samples,
+                    "build": builder.last_build,
+                }),
+            );
+            manifest.upsert_frame(rec);
+            sink.write_manifest(&manifest)?;
+            frame_bar.inc(1);
+            say(format!(
+                "frame {f} [{:>width$}/{n}] t={t:.3} s: {wall:.2} s, {:.2} Mrays/s{}",
+                k + 1,
+                (out.stats.rays + out.stats.shadow_rays) as f64 / wall.max(1e-9) / 1e6,
+                if out.invalid_samples > 0 {
+                    format!(", {} NaN/Inf samples dropped", out.invalid_samples)
+                } else {
+                    String::new()
+                }
+            ));
+            rendered_frames.push(f);
+        }
+        Ok(())
+    })();
     pixel_bar.finish_and_clear();
     frame_bar.finish_and_clear();
+    result?;
     manifest.finish(total.elapsed().as_secs_f64());
     sink.write_manifest(&manifest)?;
     if !args.no_preview && rendered_frames.len() > 1 {

@@ -632,7 +632,7 @@ fn write_mp4(dir: &Path, frames: &[u32], fps: f32) {
     let tmp = dir.join(&tmp_name);
     match output {
         Err(e) if e.kind() == io::ErrorKind::NotFound => {
-            log::warn!("preview.mp4 skipped: no ffmpeg on PATH (the GIF preview was written)");
+            log::info!("preview.mp4 skipped: no ffmpeg on PATH (the GIF preview was written)");
         }
         Err(e) => log::warn!("preview.mp4 skipped: cannot run ffmpeg: {e}"),
         Ok(out) if !out.status.success() => {

@@ -41,9 +41,10 @@ pub struct SceneArgs {
     /// Animation clip to play, by name or index (default: the first clip).
     #[arg(long, value_name = "NAME|INDEX")]
     pub animation: Option<String>,
-    /// Camera to render through, by camera or node name (default: the scene's first
-    /// camera; a scene without cameras is framed automatically).
-    #[arg(long, value_name = "NAME")]
+    /// Camera to render through, by camera name, camera node name or camera index
+    /// (unnamed cameras are called cameraN; `chronolux info` lists them). Default: the
+    /// scene's first camera; a scene without cameras is framed automatically.
+    #[arg(long, value_name = "NAME|INDEX")]
     pub camera: Option<String>,
     /// Put the scene's content, scaled to fit, into a built-in stage. `cornell`: a Cornell
     /// room lit by its ceiling light, so any animated model becomes a GI test.
@@ -58,17 +59,22 @@ pub struct RenderArgs {
     /// Frames to render: `A..B` (half-open, as in Rust), `A..=B` (inclusive) or `N`.
     /// Frame f is shown at time f/fps. Default: every frame of the clip, 0 through the
     /// frame of its last key (a scene without animation: frame 0).
-    #[arg(long, value_name = "RANGE")]
+    #[arg(long, value_name = "RANGE", allow_hyphen_values = true)]
     pub frames: Option<String>,
-    /// Frames per second of the animation timeline.
-    #[arg(long, default_value_t = 24.0, value_name = "FPS")]
+    /// Frames per second of the animation timeline (above 0, at most 1000).
+    #[arg(
+        long,
+        default_value_t = 24.0,
+        value_name = "FPS",
+        allow_negative_numbers = true
+    )]
     pub fps: f32,
     /// Samples per pixel (1 to 1048576).
     #[arg(long, default_value_t = 64, value_name = "N")]
     pub spp: u32,
     /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384). Default: 512 wide, height
     /// from the camera's aspect ratio (square when the camera gives none).
-    #[arg(long, value_name = "WxH")]
+    #[arg(long, value_name = "WxH", allow_hyphen_values = true)]
     pub resolution: Option<String>,
     /// Longest light path in segments from the camera, as Mitsuba's max_depth: 1 shows
     /// emitters only, 2 adds direct lighting. Default: unlimited (Russian roulette ends paths).

@@ -120,19 +120,29 @@ pub fn run(args: InfoArgs) -> Result<()> {
     let input = scene_input::load(&args.scene)?;
     let s = summarize(&input);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&s)?);
-        return Ok(());
+        return print_stdout(&format!("{}\n", serde_json::to_string_pretty(&s)?));
     }
-    println!("scene        {} ({})", s.name, s.source);
-    println!(
+    let mut out = String::new();
+    macro_rules! outln {
+        ($($t:tt)*) => {{
+            use std::fmt::Write as _;
+            let _ = writeln!(out, $($t)*);
+        }};
+    }
+    outln!("scene        {} ({})", s.name, s.source);
+    outln!(
         "triangles    {} in {} mesh instances of {} meshes",
-        s.triangles, s.mesh_instances, s.meshes
+        s.triangles,
+        s.mesh_instances,
+        s.meshes
     );
-    println!(
+    outln!(
         "materials    {} ({} emissive), {} textures",
-        s.materials, s.emissive_materials, s.textures
+        s.materials,
+        s.emissive_materials,
+        s.textures
     );
-    println!(
+    outln!(
         "lights       {} punctual, {} emissive materials{}",
         s.punctual_lights,
         s.emissive_materials,
@@ -142,7 +152,7 @@ pub fn run(args: InfoArgs) -> Result<()> {
             ""
         }
     );
-    println!(
+    outln!(
         "cameras      {}",
         if s.cameras.is_empty() {
             "none (automatic framing)".into()
@@ -150,12 +160,12 @@ pub fn run(args: InfoArgs) -> Result<()> {
             s.cameras.join(", ")
         }
     );
-    println!("skins        {}", s.skins);
+    outln!("skins        {}", s.skins);
     if s.animations.is_empty() {
-        println!("animations   none (static scene)");
+        outln!("animations   none (static scene)");
     }
     for a in &s.animations {
-        println!(
+        outln!(
             "animation    {}: '{}' {:.3} s, {} channels ({})",
             a.index,
             a.name,
@@ -164,7 +174,7 @@ pub fn run(args: InfoArgs) -> Result<()> {
             a.targets.join(", ")
         );
     }
-    println!(
+    outln!(
         "dynamic      {}",
         if s.dynamic_nodes.is_empty() {
             "no nodes".into()
@@ -173,7 +183,22 @@ pub fn run(args: InfoArgs) -> Result<()> {
         }
     );
     for w in &s.warnings {
-        println!("warning      {w}");
+        outln!("warning      {w}");
     }
-    Ok(())
+    print_stdout(&out)
+}
+
+/// Writes to stdout; a closed pipe (`chronolux info x.glb | head`) is not an error.
+fn print_stdout(text: &str) -> Result<()> {
+    use std::io::Write;
+    let mut stdout = std::io::stdout().lock();
+    match stdout
+        .write_all(text.as_bytes())
+        .and_then(|()| stdout.flush())
+    {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(anyhow::Error::new(e).context("cannot write to stdout"))
+        }
+        _ => Ok(()),
+    }
 }

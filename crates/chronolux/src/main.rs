@@ -9,11 +9,36 @@ mod render;
 mod scene_input;
 
 use clap::Parser;
+use std::io::Write;
 
 fn main() {
-    let args = cli::Cli::parse();
+    let args = match cli::Cli::try_parse() {
+        Ok(a) => a,
+        Err(e) if !e.use_stderr() => e.exit(), // --help, --version: stdout, exit 0
+        Err(e) => {
+            // Usage errors keep the one-line contract of every other error.
+            let text = e.to_string();
+            let first = text
+                .lines()
+                .next()
+                .unwrap_or("error: invalid arguments")
+                .trim();
+            let first = first.strip_prefix("error: ").unwrap_or(first);
+            eprintln!("error: {first} (see --help)");
+            std::process::exit(2);
+        }
+    };
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn"))
-        .format_timestamp(None)
+        .format(|buf, record| {
+            let level = match record.level() {
+                log::Level::Error => "error",
+                log::Level::Warn => "warning",
+                log::Level::Info => "info",
+                log::Level::Debug => "debug",
+                log::Level::Trace => "trace",
+            };
+            writeln!(buf, "{level}: {}", record.args())
+        })
         .init();
     let result = match args.command {
         cli::Command::Render(r) => render::run(r),
@@ -23,9 +48,25 @@ fn main() {
         cli::Command::Bench(b) => bench::run(b),
     };
     if let Err(e) = result {
-        // One line, the whole cause chain.
-        let msg: Vec<String> = e.chain().map(|c| c.to_string()).collect();
-        eprintln!("error: {}", msg.join(": "));
+        eprintln!("error: {}", one_line(&e));
         std::process::exit(1);
     }
+}
+
+/// The whole cause chain on one line. Causes that an outer message already quotes (error
+/// types that print their source) are not repeated.
+fn one_line(e: &anyhow::Error) -> String {
+    let mut msg = String::new();
+    for cause in e.chain() {
+        let c = cause.to_string();
+        let c = c.split_whitespace().collect::<Vec<_>>().join(" ");
+        if c.is_empty() || msg.contains(&c) {
+            continue;
+        }
+        if !msg.is_empty() {
+            msg.push_str(": ");
+        }
+        msg.push_str(&c);
+    }
+    msg
 }

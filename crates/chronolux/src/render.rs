@@ -10,7 +10,7 @@ use chronolux_io::image::Image;
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
 use chronolux_render::pt::PathSettings;
 use chronolux_render::registry::TechniqueConfig;
-use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -69,14 +69,7 @@ pub fn last_frame(
 }
 
 fn default_resolution(desc: &SceneDesc, camera: &CameraChoice) -> (u32, u32) {
-    let cam = match camera {
-        CameraChoice::Named(n) => desc.cameras.iter().find(|c| &c.name == n),
-        CameraChoice::First => desc
-            .topological_order()
-            .into_iter()
-            .find_map(|n| desc.nodes[n.index()].camera)
-            .map(|c| &desc.cameras[c.index()]),
-    };
+    let cam = scene_input::chosen_camera(desc, camera);
     let aspect = match cam.map(|c| c.projection) {
         Some(Projection::Perspective {
             aspect: Some(a), ..
@@ -109,11 +102,18 @@ pub fn run(args: RenderArgs) -> Result<()> {
             .build_global()
             .context("cannot set up the thread pool")?;
     }
+    // Everything that can be checked without the scene is checked before loading it.
+    let requested_frames = args.frames.as_deref().map(parse_frames).transpose()?;
+    let requested_resolution = args
+        .resolution
+        .as_deref()
+        .map(parse_resolution)
+        .transpose()?;
     let input = scene_input::load(&args.scene)?;
     let summary = info::summarize(&input);
     let last = last_frame(&input.desc, input.animation, args.fps);
-    let frames = match &args.frames {
-        Some(s) => parse_frames(s)?,
+    let frames = match requested_frames {
+        Some(f) => f,
         None => (0..=last.unwrap_or(0)).collect(),
     };
     if let Some(last) = last {
@@ -126,8 +126,15 @@ pub fn run(args: RenderArgs) -> Result<()> {
             );
         }
     }
-    let (w, h) = match &args.resolution {
-        Some(r) => parse_resolution(r)?,
+    if input.animation.is_none() && frames.len() > 1 {
+        log::warn!(
+            "{} has no animation: the {} frames will be identical",
+            input.source,
+            frames.len()
+        );
+    }
+    let (w, h) = match requested_resolution {
+        Some(r) => r,
         None => default_resolution(&input.desc, &input.camera),
     };
     let sink = FrameSink::create(&args.output)?;
@@ -152,98 +159,122 @@ pub fn run(args: RenderArgs) -> Result<()> {
         "exposure": args.exposure,
         "threads": rayon::current_num_threads(),
         "animation": input.animation.map(|a| desc.animations[a.index()].name.clone()),
+        "camera": match &input.camera {
+            CameraChoice::First => None,
+            CameraChoice::Named(n) => Some(n.clone()),
+        },
+        "stage": args.scene.stage,
+        "scene": input.source,
     });
     let mut manifest = Manifest::new(
         std::env::args().collect(),
         settings,
         serde_json::to_value(&summary)?,
     );
-    if args.resume {
-        if let Some(earlier) = sink.read_manifest()? {
-            manifest.merge_earlier(&earlier);
-        }
+    if args.resume
+        && let Some(earlier) = sink.read_manifest()?
+    {
+        check_resumable(&earlier.settings, &manifest.settings, &args.output)?;
+        manifest.merge_earlier(&earlier);
     }
 
-    let mp = MultiProgress::new();
+    // Progress bars only on a terminal; otherwise (logs, CI, tests) one line per frame.
+    let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mp = MultiProgress::with_draw_target(if interactive {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    });
     let style = ProgressStyle::with_template("{prefix:>7} [{bar:40}] {pos}/{len} {msg} ETA {eta}")
-        .unwrap()
+        .expect("valid progress template")
         .progress_chars("=> ");
     let frame_bar = mp.add(ProgressBar::new(frames.len() as u64));
     frame_bar.set_style(style.clone());
     frame_bar.set_prefix("frames");
-    let pixel_bar = mp.add(ProgressBar::new((w * h) as u64));
+    let pixel_bar = mp.add(ProgressBar::new(u64::from(w) * u64::from(h)));
     pixel_bar.set_style(style);
     pixel_bar.set_prefix("pixels");
-    let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
     let say = |s: String| {
         if interactive {
-            mp.println(s).ok().unwrap_or(())
+            // Prints above the bars; falls back to plain stderr if that fails.
+            if mp.println(&s).is_err() {
+                eprintln!("{s}");
+            }
         } else {
-            eprintln!("{s}")
+            eprintln!("{s}");
         }
     };
 
     say(format!(
-        "rendering {} frame(s) of {} at {w}x{h}, {} spp, method {} into {}",
+        "rendering {} frame(s) of {} at {w}x{h}, {} spp, method {}, {} thread(s) into {}",
         frames.len(),
         input.source,
         args.spp,
         renderer.name(),
+        rayon::current_num_threads(),
         args.output.display()
     ));
     let total = Instant::now();
     let mut rendered_frames = Vec::new();
-    for &f in &frames {
-        if args.resume && sink.is_complete(f) {
-            say(format!("frame {f}: already complete, skipped (--resume)"));
+    let n = frames.len();
+    let width = n.to_string().len();
+    // The bars are cleared whatever happens, so that an error line is not drawn over.
+    let result = (|| -> Result<()> {
+        for (k, &f) in frames.iter().enumerate() {
+            if args.resume && sink.is_complete(f) {
+                say(format!(
+                    "frame {f} [{:>width$}/{n}]: already complete, skipped (--resume)",
+                    k + 1
+                ));
+                frame_bar.inc(1);
+                rendered_frames.push(f);
+                continue;
+            }
+            let t = f as f32 / args.fps;
+            let start = Instant::now();
+            let scene = builder.build(t);
+            pixel_bar.reset();
+            let out = renderer.render_frame(&scene, f, &|n| pixel_bar.inc(n));
+            let image = Image {
+                width: out.width,
+                height: out.height,
+                pixels: out.pixels,
+            };
+            sink.write_frame(f, &image, args.exposure)
+                .with_context(|| format!("writing frame {f}"))?;
+            let wall = start.elapsed().as_secs_f64();
+            let rec = FrameRecord::new(
+                f,
+                t,
+                wall,
+                serde_json::json!({
+                    "rays": out.stats.rays,
+                    "shadow_rays": out.stats.shadow_rays,
+                    "samples": out.stats.samples,
+                    "invalid_samples": out.invalid_samples,
+                    "build": builder.last_build,
+                }),
+            );
+            manifest.upsert_frame(rec);
+            sink.write_manifest(&manifest)?;
             frame_bar.inc(1);
+            say(format!(
+                "frame {f} [{:>width$}/{n}] t={t:.3} s: {wall:.2} s, {:.2} Mrays/s{}",
+                k + 1,
+                (out.stats.rays + out.stats.shadow_rays) as f64 / wall.max(1e-9) / 1e6,
+                if out.invalid_samples > 0 {
+                    format!(", {} NaN/Inf samples dropped", out.invalid_samples)
+                } else {
+                    String::new()
+                }
+            ));
             rendered_frames.push(f);
-            continue;
         }
-        let t = f as f32 / args.fps;
-        let start = Instant::now();
-        let scene = builder.build(t);
-        pixel_bar.reset();
-        let out = renderer.render_frame(&scene, f, &|n| pixel_bar.inc(n));
-        if out.invalid_samples > 0 {
-            log::warn!(
-                "frame {f}: {} samples were NaN/Inf and were dropped",
-                out.invalid_samples
-            );
-        }
-        let image = Image {
-            width: out.width,
-            height: out.height,
-            pixels: out.pixels,
-        };
-        sink.write_frame(f, &image, args.exposure)
-            .with_context(|| format!("writing frame {f}"))?;
-        let wall = start.elapsed().as_secs_f64();
-        let rec = FrameRecord::new(
-            f,
-            t,
-            wall,
-            serde_json::json!({
-                "rays": out.stats.rays,
-                "shadow_rays": out.stats.shadow_rays,
-                "samples": out.stats.samples,
-                "invalid_samples": out.invalid_samples,
-                "build": builder.last_build,
-            }),
-        );
-        manifest.upsert_frame(rec);
-        sink.write_manifest(&manifest)?;
-        frame_bar.inc(1);
-        if !interactive {
-            eprintln!(
-                "frame {f}: {wall:.2} s, {:.2} Mrays/s",
-                (out.stats.rays + out.stats.shadow_rays) as f64 / wall / 1e6
-            );
-        }
-        rendered_frames.push(f);
-    }
+        Ok(())
+    })();
     pixel_bar.finish_and_clear();
     frame_bar.finish_and_clear();
+    result?;
     manifest.finish(total.elapsed().as_secs_f64());
     sink.write_manifest(&manifest)?;
     if !args.no_preview && rendered_frames.len() > 1 {
@@ -258,5 +289,43 @@ pub fn run(args: RenderArgs) -> Result<()> {
         total.elapsed().as_secs_f64(),
         args.output.display()
     ));
+    Ok(())
+}
+
+/// `--resume` continues a run only with the settings that made its frames: mixing frames of
+/// different sample counts, sizes or cameras in one sequence would be silently wrong.
+fn check_resumable(
+    earlier: &serde_json::Value,
+    now: &serde_json::Value,
+    dir: &std::path::Path,
+) -> Result<()> {
+    let keys = [
+        "technique",
+        "resolution",
+        "fps",
+        "exposure",
+        "animation",
+        "camera",
+        "stage",
+        "scene",
+    ];
+    let differ: Vec<String> = keys
+        .iter()
+        .filter(|k| earlier.get(**k).is_some() && earlier.get(**k) != now.get(**k))
+        .map(|k| {
+            format!(
+                "{k} was {} and is now {}",
+                earlier[*k],
+                now.get(*k).unwrap_or(&serde_json::Value::Null)
+            )
+        })
+        .collect();
+    if !differ.is_empty() {
+        bail!(
+            "--resume: {} holds frames rendered with other settings ({}); use the same settings or another --output",
+            dir.display(),
+            differ.join("; ")
+        );
+    }
     Ok(())
 }

@@ -2,7 +2,7 @@
 
 use crate::cli::SceneArgs;
 use anyhow::{Context, Result, bail};
-use chronolux_core::scene::desc::{AnimationId, SceneDesc};
+use chronolux_core::scene::desc::{AnimationId, CameraDesc, SceneDesc};
 use chronolux_core::scene::frame::CameraChoice;
 use chronolux_core::scene::stage;
 
@@ -26,9 +26,15 @@ pub fn load(args: &SceneArgs) -> Result<SceneInput> {
             other => bail!("unknown stage '{other}' (available: cornell)"),
         }
     }
+    // Unnamed cameras get `cameraN` (N: their glTF index) so that `--camera` can name them
+    // and `info` can list them.
+    for (i, c) in desc.cameras.iter_mut().enumerate() {
+        if c.name.trim().is_empty() {
+            c.name = format!("camera{i}");
+        }
+    }
     for w in &desc.warnings {
         log::warn!("{w}");
-        eprintln!("warning: {w}");
     }
     let animation = match &args.animation {
         Some(key) => Some(desc.find_animation(key).with_context(|| {
@@ -50,7 +56,7 @@ pub fn load(args: &SceneArgs) -> Result<SceneInput> {
         None => (!desc.animations.is_empty()).then_some(AnimationId(0)),
     };
     let camera = match &args.camera {
-        Some(n) => CameraChoice::Named(n.clone()),
+        Some(key) => resolve_camera(&mut desc, key, &source)?,
         None => CameraChoice::First,
     };
     Ok(SceneInput {
@@ -59,4 +65,69 @@ pub fn load(args: &SceneArgs) -> Result<SceneInput> {
         camera,
         source,
     })
+}
+
+/// Cameras placed in the scene by a node, as (camera index, node name), in glTF order.
+fn placed_cameras(desc: &SceneDesc) -> Vec<(usize, &str)> {
+    desc.nodes
+        .iter()
+        .filter_map(|n| n.camera.map(|c| (c.index(), n.name.as_str())))
+        .collect()
+}
+
+/// `--camera KEY`: a camera name, a camera node name, or a camera index.
+fn resolve_camera(desc: &mut SceneDesc, key: &str, source: &str) -> Result<CameraChoice> {
+    let placed = placed_cameras(desc);
+    let by_name = placed
+        .iter()
+        .any(|&(c, node)| desc.cameras[c].name == key || (!node.is_empty() && node == key));
+    if by_name {
+        return Ok(CameraChoice::Named(key.to_string()));
+    }
+    if let Ok(i) = key.parse::<usize>()
+        && placed.iter().any(|&(c, _)| c == i)
+    {
+        // Make the name unique, so that choosing by name picks exactly this camera.
+        let name = desc.cameras[i].name.clone();
+        let clashes = desc.cameras.iter().filter(|c| c.name == name).count() > 1
+            || desc.nodes.iter().any(|n| n.name == name);
+        if clashes {
+            desc.cameras[i].name = format!("camera{i}");
+        }
+        return Ok(CameraChoice::Named(desc.cameras[i].name.clone()));
+    }
+    let names: Vec<String> = placed
+        .iter()
+        .map(|&(c, node)| {
+            if node.is_empty() || node == desc.cameras[c].name {
+                format!("{c}:{}", desc.cameras[c].name)
+            } else {
+                format!("{c}:{} (node {node})", desc.cameras[c].name)
+            }
+        })
+        .collect();
+    bail!(
+        "no camera '{key}' in {source} (cameras: {})",
+        if names.is_empty() {
+            "none; the view is framed automatically".into()
+        } else {
+            names.join(", ")
+        }
+    )
+}
+
+/// The camera a choice designates (`None`: automatic framing).
+pub fn chosen_camera<'a>(desc: &'a SceneDesc, choice: &CameraChoice) -> Option<&'a CameraDesc> {
+    let order = desc.topological_order();
+    let mut placed = order.into_iter().filter_map(|n| {
+        let node = &desc.nodes[n.index()];
+        node.camera
+            .map(|c| (node.name.as_str(), &desc.cameras[c.index()]))
+    });
+    match choice {
+        CameraChoice::First => placed.next().map(|(_, c)| c),
+        CameraChoice::Named(key) => placed
+            .find(|(node, c)| c.name == *key || node == key)
+            .map(|(_, c)| c),
+    }
 }

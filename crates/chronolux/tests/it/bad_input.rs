@@ -1,0 +1,220 @@
+//! Bad input: a non-zero exit, one `error:` line naming the problem, never a panic.
+
+use crate::common::*;
+use serde_json::json;
+use std::path::Path;
+
+/// `chronolux render SCENE --frames 0` at a tiny size into a fresh folder.
+fn render_scene(scene: &Path, extra: &[&str]) -> std::process::Output {
+    let out = temp_dir("bad-out");
+    let mut args = vec![
+        "render",
+        scene.to_str().unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+    ];
+    args.extend(FAST);
+    args.extend(extra);
+    run(&args)
+}
+
+/// `chronolux render` of the demo with `extra` (expected to fail before rendering).
+fn render_demo(extra: &[&str]) -> std::process::Output {
+    let out = temp_dir("bad-demo");
+    let mut args = vec!["render", "--output", out.to_str().unwrap()];
+    args.extend(extra);
+    run(&args)
+}
+
+#[test]
+fn missing_file() {
+    let dir = temp_dir("missing");
+    let p = dir.join("nothing here.glb");
+    fails(
+        &render_scene(&p, &[]),
+        &["nothing here.glb", "no such file"],
+    );
+    fails(&run(["info", p.to_str().unwrap()]), &["nothing here.glb"]);
+}
+
+#[test]
+fn directory_as_scene() {
+    let dir = temp_dir("dirscene");
+    fails(
+        &render_scene(&dir, &[]),
+        &[dir.to_str().unwrap(), "directory"],
+    );
+}
+
+#[test]
+fn truncated_glb() {
+    let bytes = std::fs::read(scene("BoxAnimated.glb")).unwrap();
+    let dir = temp_dir("truncated");
+    for len in [bytes.len() / 2, 30, 6, 0] {
+        let p = dir.join(format!("cut{len}.glb"));
+        std::fs::write(&p, &bytes[..len]).unwrap();
+        fails(&render_scene(&p, &[]), &[&format!("cut{len}.glb")]);
+    }
+}
+
+#[test]
+fn json_that_is_not_gltf() {
+    let dir = temp_dir("notgltf");
+    let p = dir.join("hello.gltf");
+    std::fs::write(&p, br#"{"hello": "world"}"#).unwrap();
+    fails(&render_scene(&p, &[]), &["hello.gltf", "asset"]);
+    std::fs::write(&p, b"not json at all").unwrap();
+    fails(&render_scene(&p, &[]), &["hello.gltf"]);
+}
+
+#[test]
+fn accessor_out_of_range() {
+    let dir = temp_dir("accessor");
+    let (mut v, buf) = tiny(&TRI, &[0, 1, 2]);
+    v["accessors"][0]["count"] = json!(4);
+    let p = write_gltf(&dir, &v, Some(&buf));
+    fails(&render_scene(&p, &[]), &["POSITION"]);
+    let (v, buf) = tiny(&TRI, &[0, 1, 7]);
+    let p = write_gltf(&dir, &v, Some(&buf));
+    fails(&render_scene(&p, &[]), &["indices"]);
+}
+
+#[test]
+fn nan_and_inf_vertices() {
+    let dir = temp_dir("nan");
+    let (v, buf) = tiny(
+        &[[0.0, 0.0, 0.0], [f32::NAN, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        &[0, 1, 2],
+    );
+    let p = write_gltf(&dir, &v, Some(&buf));
+    fails(&render_scene(&p, &[]), &["POSITION", "NaN"]);
+    let (v, buf) = tiny(
+        &[[0.0, f32::INFINITY, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+        &[0, 1, 2],
+    );
+    let p = write_gltf(&dir, &v, Some(&buf));
+    fails(&render_scene(&p, &[]), &["POSITION"]);
+}
+
+#[test]
+fn missing_external_buffer() {
+    let dir = temp_dir("nobuffer");
+    let (v, _) = tiny(&TRI, &[0, 1, 2]);
+    let p = write_gltf(&dir, &v, None);
+    fails(&render_scene(&p, &[]), &["buffer.bin"]);
+}
+
+#[test]
+fn missing_texture() {
+    let dir = temp_dir("notexture");
+    let (mut v, buf) = tiny(&TRI, &[0, 1, 2]);
+    v["images"] = json!([{"uri": "missing.png"}]);
+    v["textures"] = json!([{"source": 0}]);
+    v["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    v["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let p = write_gltf(&dir, &v, Some(&buf));
+    fails(&render_scene(&p, &[]), &["missing.png"]);
+    // A corrupt image too.
+    std::fs::write(dir.join("missing.png"), b"\x89PNG\r\n\x1a\nnot really").unwrap();
+    fails(&render_scene(&p, &[]), &["missing.png"]);
+}
+
+#[test]
+fn bad_resolution() {
+    for (r, needle) in [
+        ("0x10", "0x10"),
+        ("100000x10", "100000x10"),
+        ("abc", "abc"),
+        ("24x", "24x"),
+        ("-3x4", "resolution"),
+    ] {
+        fails(
+            &render_demo(&["--resolution", r]),
+            &["--resolution", needle],
+        );
+    }
+    // Checked before a scene is loaded.
+    let p = scene("BoxAnimated.glb");
+    let out = render_scene(&p, &["--resolution", "0x10"]);
+    let err = fails(&out, &["--resolution"]);
+    assert!(!stderr(&out).contains("warning"), "{err}");
+}
+
+#[test]
+fn bad_spp() {
+    fails(&render_demo(&["--spp", "0"]), &["--spp", "0"]);
+    fails(
+        &render_demo(&["--spp", "100000000"]),
+        &["--spp", "100000000"],
+    );
+    fails(&render_demo(&["--spp", "99999999999"]), &["--spp"]);
+    fails(&render_demo(&["--spp", "many"]), &["--spp", "many"]);
+}
+
+#[test]
+fn bad_fps() {
+    fails(&render_demo(&["--fps", "0"]), &["--fps"]);
+    fails(&render_demo(&["--fps", "-24"]), &["--fps"]);
+    fails(&render_demo(&["--fps", "NaN"]), &["--fps"]);
+}
+
+#[test]
+fn frames_outside_the_animation_or_empty() {
+    let p = scene("BoxAnimated.glb");
+    fails(
+        &render_scene(&p, &["--frames", "0..500"]),
+        &["--frames", "499", "ends at frame"],
+    );
+    fails(&render_demo(&["--frames", "5..5"]), &["--frames", "empty"]);
+    fails(&render_demo(&["--frames", "3..1"]), &["--frames", "empty"]);
+    fails(&render_demo(&["--frames", "x..2"]), &["--frames", "'x'"]);
+    fails(&render_demo(&["--frames", "-1..2"]), &["--frames", "'-1'"]);
+}
+
+#[test]
+fn unknown_animation_and_camera() {
+    fails(&render_demo(&["--animation", "walk"]), &["walk", "demo"]);
+    fails(&render_demo(&["--animation", "7"]), &["'7'"]);
+    let p = scene("Cameras.gltf");
+    fails(
+        &render_scene(&p, &["--camera", "drone"]),
+        &["drone", "camera0", "camera1"],
+    );
+    fails(&render_scene(&p, &["--camera", "5"]), &["'5'"]);
+    fails(
+        &render_demo(&["--camera", "drone"]),
+        &["drone", "stage_camera"],
+    );
+}
+
+#[test]
+fn unwritable_output_folder() {
+    let dir = temp_dir("unwritable");
+    let file = dir.join("a file");
+    std::fs::write(&file, b"x").unwrap();
+    let below = file.join("frames");
+    let out = run([
+        "render",
+        "--frames",
+        "0",
+        "--resolution",
+        "8x8",
+        "--spp",
+        "1",
+        "--output",
+        below.to_str().unwrap(),
+    ]);
+    let line = fails(&out, &["not writable", below.to_str().unwrap()]);
+    // The OS reason once, not repeated by the cause chain.
+    assert_eq!(line.matches("os error").count(), 1, "{line}");
+}
+
+#[test]
+fn usage_errors_are_one_line() {
+    fails(&run(["render", "--bogus"]), &["--bogus"]);
+    fails(&run(["render", "--method", "magic"]), &["magic"]);
+    fails(&run(["render", "--stage", "moon"]), &["moon"]);
+    fails(&run(["info", "a.glb", "b.glb"]), &["b.glb"]);
+    fails(&render_demo(&["--threads", "0"]), &["--threads"]);
+    fails(&render_demo(&["--max-depth", "0"]), &["--max-depth"]);
+}

@@ -1,0 +1,84 @@
+//! `chronolux info`: text and JSON summaries of shared scenes.
+
+use crate::common::*;
+use serde_json::Value;
+
+fn info_json(name: &str, extra: &[&str]) -> Value {
+    let p = scene(name);
+    let mut args = vec!["info", p.to_str().unwrap(), "--json"];
+    args.extend(extra);
+    let out = run(&args);
+    ok(&out);
+    serde_json::from_str(&stdout(&out)).expect("info --json prints JSON")
+}
+
+#[test]
+fn animated_morph_cube_json() {
+    let v = info_json("AnimatedMorphCube.glb", &[]);
+    assert!(v["triangles"].as_u64().unwrap() > 0);
+    let anims = v["animations"].as_array().unwrap();
+    assert!(!anims.is_empty());
+    assert!(anims[0]["duration_s"].as_f64().unwrap() > 0.0);
+    assert!(
+        anims[0]["targets"]
+            .as_array()
+            .unwrap()
+            .contains(&"weights".into()),
+        "{v}"
+    );
+    assert!(!v["dynamic_nodes"].as_array().unwrap().is_empty(), "{v}");
+}
+
+#[test]
+fn interpolation_test_json_and_clip_choice() {
+    let v = info_json("InterpolationTest.glb", &[]);
+    assert_eq!(v["triangles"], 110);
+    let anims = v["animations"].as_array().unwrap();
+    assert!(anims.len() > 1);
+    for (i, a) in anims.iter().enumerate() {
+        assert_eq!(a["index"], i);
+        assert!(a["duration_s"].as_f64().unwrap() > 0.0, "{a}");
+        assert!(a["channels"].as_u64().unwrap() > 0);
+    }
+    // The first clip animates one node; another clip, another node.
+    let first = v["dynamic_nodes"].as_array().unwrap().clone();
+    assert_eq!(first.len(), 1, "{v}");
+    let other = info_json("InterpolationTest.glb", &["--animation", "Linear Scale"]);
+    let second = other["dynamic_nodes"].as_array().unwrap().clone();
+    assert_eq!(second.len(), 1, "{other}");
+    assert_ne!(first, second);
+}
+
+#[test]
+fn info_text() {
+    for name in ["AnimatedMorphCube.glb", "InterpolationTest.glb"] {
+        let p = scene(name);
+        let out = run(["info", p.to_str().unwrap()]);
+        ok(&out);
+        let text = stdout(&out);
+        for key in [
+            "triangles",
+            "materials",
+            "lights",
+            "cameras",
+            "animation",
+            "dynamic",
+        ] {
+            assert!(text.contains(key), "{name}: no '{key}' in\n{text}");
+        }
+    }
+}
+
+#[test]
+fn info_lists_unnamed_cameras_by_their_cli_name() {
+    let v = info_json("Cameras.gltf", &[]);
+    let cams: Vec<&str> = v["cameras"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_str().unwrap())
+        .collect();
+    assert_eq!(cams.len(), 2);
+    assert!(cams[0].starts_with("camera0 (perspective"), "{cams:?}");
+    assert!(cams[1].starts_with("camera1 (orthographic"), "{cams:?}");
+}

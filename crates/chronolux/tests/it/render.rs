@@ -1,0 +1,333 @@
+//! `chronolux render`: output layout, manifest, resume, shared scenes, determinism, UX.
+
+use crate::common::*;
+use std::path::Path;
+use std::time::SystemTime;
+
+fn frame_files(dir: &Path, frames: &[u32]) {
+    for f in frames {
+        for ext in ["exr", "png"] {
+            let p = dir.join(format!("frame_{f:04}.{ext}"));
+            assert!(p.is_file(), "missing {}", p.display());
+        }
+    }
+}
+
+fn mtimes(dir: &Path, frames: &[u32]) -> Vec<SystemTime> {
+    frames
+        .iter()
+        .flat_map(|f| {
+            ["exr", "png"].map(|ext| {
+                std::fs::metadata(dir.join(format!("frame_{f:04}.{ext}")))
+                    .unwrap()
+                    .modified()
+                    .unwrap()
+            })
+        })
+        .collect()
+}
+
+fn render_demo(dir: &Path, extra: &[&str]) -> String {
+    let mut args = vec!["render", "--output", dir.to_str().unwrap()];
+    args.extend(FAST);
+    args.extend(extra);
+    ok(&run(&args))
+}
+
+#[test]
+fn demo_three_frames_manifest_preview_and_resume() {
+    let dir = temp_dir("demo3");
+    let err = render_demo(&dir, &["--frames", "0..3"]);
+    frame_files(&dir, &[0, 1, 2]);
+    assert!(!dir.join("frame_0003.exr").exists());
+    assert!(dir.join("preview.gif").is_file());
+    let m = manifest(&dir);
+    let frames = m["frames"].as_array().unwrap();
+    assert_eq!(frames.len(), 3);
+    for (i, r) in frames.iter().enumerate() {
+        assert_eq!(r["frame"], i as u64);
+        assert!(r["wall_s"].as_f64().unwrap() > 0.0);
+        assert!(r["stats"]["rays"].as_u64().unwrap() > 0);
+        assert_eq!(r["stats"]["samples"].as_u64().unwrap(), 24 * 24 * 2);
+        let t = r["time_s"].as_f64().unwrap();
+        assert!((t - i as f64 / 24.0).abs() < 1e-6, "{t}");
+    }
+    assert_eq!(m["settings"]["resolution"], serde_json::json!([24, 24]));
+    assert_eq!(m["settings"]["technique"]["spp"], 2);
+    assert_eq!(m["settings"]["fps"], 24.0);
+    assert!(m["finished"].is_string());
+    assert!(m["scene"]["triangles"].as_u64().unwrap() > 0);
+    // Off a terminal: no progress bar, one line per frame.
+    assert!(!err.contains('\r') && !err.contains("ETA"), "{err}");
+    for f in 0..3 {
+        assert!(err.contains(&format!("frame {f} [{}/3]", f + 1)), "{err}");
+    }
+    assert!(
+        !err.contains("warning"),
+        "the demo renders without warnings:\n{err}"
+    );
+
+    // --resume: every frame complete, nothing re-rendered.
+    let before = mtimes(&dir, &[0, 1, 2]);
+    std::thread::sleep(std::time::Duration::from_millis(20));
+    let err = render_demo(&dir, &["--frames", "0..3", "--resume"]);
+    assert_eq!(err.matches("skipped").count(), 3, "{err}");
+    assert_eq!(mtimes(&dir, &[0, 1, 2]), before);
+    assert_eq!(manifest(&dir)["frames"].as_array().unwrap().len(), 3);
+
+    // A deleted frame is rendered again, the others are kept.
+    std::fs::remove_file(dir.join("frame_0001.png")).unwrap();
+    let err = render_demo(&dir, &["--frames", "0..3", "--resume"]);
+    assert_eq!(err.matches("skipped").count(), 2, "{err}");
+    frame_files(&dir, &[0, 1, 2]);
+    let after = mtimes(&dir, &[0, 1, 2]);
+    assert_eq!(after[0..2], before[0..2]);
+    assert_eq!(after[4..6], before[4..6]);
+    assert_ne!(after[2..4], before[2..4]);
+
+    // Resuming with other settings would mix sequences: refused.
+    let out = run([
+        "render",
+        "--output",
+        dir.to_str().unwrap(),
+        "--resolution",
+        "24x24",
+        "--spp",
+        "3",
+        "--frames",
+        "0..3",
+        "--resume",
+    ]);
+    fails(&out, &["--resume", "spp"]);
+}
+
+#[test]
+fn inclusive_range_gives_the_same_frames() {
+    let a = temp_dir("excl");
+    let b = temp_dir("incl");
+    render_demo(&a, &["--frames", "0..3", "--no-preview"]);
+    render_demo(&b, &["--frames", "0..=2", "--no-preview"]);
+    frame_files(&b, &[0, 1, 2]);
+    assert!(!b.join("frame_0003.exr").exists());
+    assert!(!b.join("preview.gif").exists());
+    assert_eq!(
+        manifest(&a)["settings"]["frames"],
+        manifest(&b)["settings"]["frames"]
+    );
+    for f in 0..3 {
+        let name = format!("frame_{f:04}.exr");
+        assert_eq!(
+            std::fs::read(a.join(&name)).unwrap(),
+            std::fs::read(b.join(&name)).unwrap(),
+            "{name}"
+        );
+    }
+}
+
+#[test]
+fn same_seed_gives_identical_exr_bytes() {
+    let a = temp_dir("seed-a");
+    let b = temp_dir("seed-b");
+    let c = temp_dir("seed-c");
+    render_demo(&a, &["--frames", "5", "--seed", "7"]);
+    render_demo(&b, &["--frames", "5", "--seed", "7"]);
+    render_demo(&c, &["--frames", "5", "--seed", "8"]);
+    let read = |d: &Path| std::fs::read(d.join("frame_0005.exr")).unwrap();
+    assert_eq!(read(&a), read(&b));
+    assert_ne!(read(&a), read(&c), "the seed must change the noise");
+}
+
+#[test]
+fn thread_count_does_not_change_pixels() {
+    let a = temp_dir("threads1");
+    let b = temp_dir("threads2");
+    render_demo(&a, &["--frames", "3", "--threads", "1"]);
+    render_demo(&b, &["--frames", "3", "--threads", "2"]);
+    assert_eq!(manifest(&a)["settings"]["threads"], 1);
+    assert_eq!(manifest(&b)["settings"]["threads"], 2);
+    let ia = chronolux_io::image::read_exr(a.join("frame_0003.exr")).unwrap();
+    let ib = chronolux_io::image::read_exr(b.join("frame_0003.exr")).unwrap();
+    assert_eq!((ia.width, ia.height), (24, 24));
+    assert!(ia.mean_value() > 0.0);
+    let bits = |i: &chronolux_io::image::Image| -> Vec<[u32; 3]> {
+        i.pixels
+            .iter()
+            .map(|p| [p[0].to_bits(), p[1].to_bits(), p[2].to_bits()])
+            .collect()
+    };
+    assert_eq!(bits(&ia), bits(&ib));
+}
+
+#[test]
+fn box_animated_renders_with_default_light_message() {
+    let dir = temp_dir("box");
+    let p = scene("BoxAnimated.glb");
+    let mut args = vec![
+        "render",
+        p.to_str().unwrap(),
+        "--frames",
+        "10..12",
+        "--output",
+        dir.to_str().unwrap(),
+    ];
+    args.extend(FAST);
+    let err = ok(&run(&args));
+    frame_files(&dir, &[10, 11]);
+    // No light in the file: the default environment, said once.
+    assert_eq!(err.matches("no light").count(), 1, "{err}");
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("warning: ") && l.contains("environment"))
+    );
+    assert_eq!(manifest(&dir)["scene"]["environment_light"], true);
+}
+
+#[test]
+fn rigged_simple_in_cornell_stage() {
+    let dir = temp_dir("rigged");
+    let p = scene("RiggedSimple.glb");
+    let mut args = vec![
+        "render",
+        p.to_str().unwrap(),
+        "--stage",
+        "cornell",
+        "--frames",
+        "0..=1",
+        "--output",
+        dir.to_str().unwrap(),
+    ];
+    args.extend(FAST);
+    let err = ok(&run(&args));
+    frame_files(&dir, &[0, 1]);
+    let m = manifest(&dir);
+    assert_eq!(m["settings"]["stage"], "cornell");
+    // The stage brings its own light: no default environment.
+    assert_eq!(m["scene"]["environment_light"], false, "{err}");
+    let img = chronolux_io::image::read_exr(dir.join("frame_0001.exr")).unwrap();
+    assert!(img.mean_value() > 0.0);
+}
+
+#[test]
+fn animation_by_index_and_name() {
+    let p = scene("InterpolationTest.glb");
+    let render = |anim: &str| {
+        let dir = temp_dir("anim");
+        let mut args = vec![
+            "render",
+            p.to_str().unwrap(),
+            "--animation",
+            anim,
+            "--frames",
+            "0",
+            "--output",
+            dir.to_str().unwrap(),
+        ];
+        args.extend(FAST);
+        ok(&run(&args));
+        let m = manifest(&dir);
+        (
+            m["settings"]["animation"].as_str().unwrap().to_string(),
+            std::fs::read(dir.join("frame_0000.exr")).unwrap(),
+        )
+    };
+    let (by_index, img_i) = render("1");
+    let (by_name, img_n) = render("Linear Scale");
+    assert_eq!(by_index, "Linear Scale");
+    assert_eq!(by_name, "Linear Scale");
+    assert_eq!(img_i, img_n);
+}
+
+#[test]
+fn camera_by_name_and_index_orthographic_renders() {
+    let p = scene("Cameras.gltf");
+    let render = |cam: &str| {
+        let dir = temp_dir("cam");
+        let mut args = vec![
+            "render",
+            p.to_str().unwrap(),
+            "--camera",
+            cam,
+            "--output",
+            dir.to_str().unwrap(),
+        ];
+        args.extend(FAST);
+        ok(&run(&args));
+        chronolux_io::image::read_exr(dir.join("frame_0000.exr")).unwrap()
+    };
+    let persp = render("camera0");
+    let ortho = render("camera1");
+    let ortho_by_index = render("1");
+    assert_eq!(ortho.pixels, ortho_by_index.pixels);
+    assert_ne!(
+        persp.pixels, ortho.pixels,
+        "the two cameras see differently"
+    );
+    // The orthographic view shows the quad in front of the environment: not uniform.
+    let lum: Vec<f32> = ortho.pixels.iter().map(|p| p[0] + p[1] + p[2]).collect();
+    let (lo, hi) = lum
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+    assert!(lo.is_finite() && hi > lo + 1e-3, "uniform image {lo}..{hi}");
+}
+
+#[test]
+fn degenerate_triangles_are_counted_and_skipped() {
+    let dir = temp_dir("degenerate");
+    let (v, buf) = tiny(
+        &[
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [2.0, 0.0, 0.0],
+        ],
+        &[0, 1, 2, 0, 0, 1, 0, 1, 3],
+    );
+    let p = write_gltf(&dir, &v, Some(&buf));
+    let out = dir.join("out");
+    let mut args = vec![
+        "render",
+        p.to_str().unwrap(),
+        "--output",
+        out.to_str().unwrap(),
+    ];
+    args.extend(FAST);
+    let err = ok(&run(&args));
+    assert!(
+        err.lines()
+            .any(|l| l.starts_with("warning: ") && l.contains("2 degenerate triangle")),
+        "{err}"
+    );
+    frame_files(&out, &[0]);
+}
+
+#[test]
+fn render_help_mentions_every_flag() {
+    let out = run(["render", "--help"]);
+    assert!(out.status.success());
+    let help = stdout(&out);
+    for flag in [
+        "--frames",
+        "--fps",
+        "--spp",
+        "--resolution",
+        "--max-depth",
+        "--method",
+        "--seed",
+        "--threads",
+        "--output",
+        "--stage",
+        "--resume",
+        "--animation",
+        "--camera",
+        "--exposure",
+        "--no-preview",
+        "[SCENE]",
+    ] {
+        assert!(help.contains(flag), "--help lacks {flag}:\n{help}");
+    }
+    // Explains, not just lists: the half-open range and Mitsuba's depth convention.
+    assert!(
+        help.contains("A..=B") && help.contains("max_depth"),
+        "{help}"
+    );
+}

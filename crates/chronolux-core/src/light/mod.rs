@@ -69,8 +69,10 @@ pub struct LightSample {
 }
 
 impl Light {
-    /// Total emitted power (W-equivalent), used for light selection. `scene` is the
-    /// bounding sphere (centre, radius) for infinite lights.
+    /// Total emitted power (W-equivalent, luminance of the colour), used for light
+    /// selection. Infinite lights report the flux entering the scene's bounding sphere of
+    /// radius `scene_radius`: E·πR² for a directional light, 4πR²·πL for a uniform
+    /// environment (every point of the sphere receives πL through its inward hemisphere).
     pub fn power(&self, scene_radius: f32) -> f32 {
         match self {
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
@@ -79,7 +81,7 @@ impl Light {
                 cos_inner,
                 cos_outer,
                 ..
-            } => 2.0 * PI * (1.0 - 0.5 * (cos_inner + cos_outer)) * luminance(*intensity),
+            } => spot_solid_angle(*cos_inner, *cos_outer) * luminance(*intensity),
             Light::Directional { irradiance, .. } => {
                 PI * scene_radius * scene_radius * luminance(*irradiance)
             }
@@ -90,7 +92,7 @@ impl Light {
                 ..
             } => PI * area * luminance(*radiance) * if *two_sided { 2.0 } else { 1.0 },
             Light::Environment { radiance } => {
-                PI * PI * scene_radius * scene_radius * luminance(*radiance)
+                4.0 * PI * PI * scene_radius * scene_radius * luminance(*radiance)
             }
         }
     }
@@ -260,6 +262,17 @@ pub fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
     }
     let s = (cos_theta - cos_outer) / (cos_inner - cos_outer);
     s * s
+}
+
+/// ∫ spot_falloff dω over the sphere: with s = (c − cos_outer)/(cos_inner − cos_outer)
+/// the falloff is 1 for c ≥ cos_inner and s² between the cones, so the integral is
+/// 2π[(1 − cos_inner) + ∫ s² dc] = 2π[(1 − cos_inner) + (cos_inner − cos_outer)/3]
+/// (a hard cone 2π(1 − cos_outer) when the cones coincide or are inverted).
+pub fn spot_solid_angle(cos_inner: f32, cos_outer: f32) -> f32 {
+    if cos_inner <= cos_outer {
+        return 2.0 * PI * (1.0 - cos_outer);
+    }
+    2.0 * PI * ((1.0 - cos_inner) + (cos_inner - cos_outer) / 3.0)
 }
 
 /// Chooses lights in proportion to their power.

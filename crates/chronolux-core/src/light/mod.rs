@@ -11,6 +11,9 @@ use crate::sampling::distrib::Distribution1D;
 use crate::sampling::warps;
 use std::f32::consts::PI;
 
+pub mod spherical;
+use spherical::{sample_spherical_triangle, triangle_solid_angle, use_solid_angle_sampling};
+
 /// One light of a frame (world space).
 #[derive(Clone, Debug)]
 pub enum Light {
@@ -106,6 +109,11 @@ impl Light {
 
     /// Samples incident illumination at `p` (surface point, normal used only to pick
     /// environment samples). `u` uniform in the unit square. `scene_radius` for infinite lights.
+    ///
+    /// Triangle lights are sampled uniformly in the solid angle they subtend at `p` when
+    /// that lies in [`spherical::MIN_SPHERICAL_SAMPLE_AREA`,
+    /// `spherical::MAX_SPHERICAL_SAMPLE_AREA`], uniformly by area otherwise; [`Light::pdf_li`]
+    /// makes the same choice from the same (p, triangle).
     pub fn sample_li(&self, p: Vec3, u: Vec2, scene_radius: f32) -> Option<LightSample> {
         match self {
             Light::Point { p: lp, intensity } => {
@@ -174,7 +182,16 @@ impl Light {
                 two_sided,
                 ..
             } => {
-                let (b1, b2) = warps::sample_uniform_triangle(u);
+                let omega = triangle_solid_angle(p, *p0, *e1, *e2);
+                let spherical = use_solid_angle_sampling(omega);
+                if spherical && !*two_sided && (p - *p0).dot(*n) <= 0.0 {
+                    return None;
+                }
+                let (b1, b2) = if spherical {
+                    sample_spherical_triangle(p, *p0, *e1, *e2, [u.x, u.y])?
+                } else {
+                    warps::sample_uniform_triangle(u)
+                };
                 let lp = *p0 + *e1 * b1 + *e2 * b2;
                 let d = lp - p;
                 let d2 = d.length_squared();
@@ -182,15 +199,19 @@ impl Light {
                     return None;
                 }
                 let wi = d / d2.sqrt();
-                let cos_l = -wi.dot(*n);
-                if cos_l <= 0.0 && !*two_sided {
-                    return None;
-                }
-                let cos_l = cos_l.abs();
-                if cos_l == 0.0 {
-                    return None;
-                }
-                let pdf = d2 / (cos_l * *area);
+                let pdf = if spherical {
+                    1.0 / omega
+                } else {
+                    let cos_l = -wi.dot(*n);
+                    if cos_l <= 0.0 && !*two_sided {
+                        return None;
+                    }
+                    let cos_l = cos_l.abs();
+                    if cos_l == 0.0 {
+                        return None;
+                    }
+                    d2 / (cos_l * *area)
+                };
                 Some(LightSample {
                     wi,
                     p: lp,
@@ -221,8 +242,22 @@ impl Light {
     pub fn pdf_li(&self, p: Vec3, lp: Vec3) -> f32 {
         match self {
             Light::Triangle {
-                n, area, two_sided, ..
+                p0,
+                e1,
+                e2,
+                n,
+                area,
+                two_sided,
+                ..
             } => {
+                let omega = triangle_solid_angle(p, *p0, *e1, *e2);
+                if use_solid_angle_sampling(omega) {
+                    return if !*two_sided && (p - *p0).dot(*n) <= 0.0 {
+                        0.0
+                    } else {
+                        1.0 / omega
+                    };
+                }
                 let d = lp - p;
                 let d2 = d.length_squared();
                 let cos_l = -d.dot(*n) / d2.sqrt();

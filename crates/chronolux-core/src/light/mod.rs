@@ -11,6 +11,9 @@ use crate::sampling::distrib::Distribution1D;
 use crate::sampling::warps;
 use std::f32::consts::PI;
 
+pub mod spherical;
+use spherical::{sample_spherical_triangle, triangle_solid_angle, use_solid_angle_sampling};
+
 /// One light of a frame (world space).
 #[derive(Clone, Debug)]
 pub enum Light {
@@ -69,8 +72,10 @@ pub struct LightSample {
 }
 
 impl Light {
-    /// Total emitted power (W-equivalent), used for light selection. `scene` is the
-    /// bounding sphere (centre, radius) for infinite lights.
+    /// Total emitted power (W-equivalent, luminance of the colour), used for light
+    /// selection. Infinite lights report the flux entering the scene's bounding sphere of
+    /// radius `scene_radius`: E·πR² for a directional light, 4πR²·πL for a uniform
+    /// environment (every point of the sphere receives πL through its inward hemisphere).
     pub fn power(&self, scene_radius: f32) -> f32 {
         match self {
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
@@ -79,7 +84,7 @@ impl Light {
                 cos_inner,
                 cos_outer,
                 ..
-            } => 2.0 * PI * (1.0 - 0.5 * (cos_inner + cos_outer)) * luminance(*intensity),
+            } => spot_solid_angle(*cos_inner, *cos_outer) * luminance(*intensity),
             Light::Directional { irradiance, .. } => {
                 PI * scene_radius * scene_radius * luminance(*irradiance)
             }
@@ -90,7 +95,7 @@ impl Light {
                 ..
             } => PI * area * luminance(*radiance) * if *two_sided { 2.0 } else { 1.0 },
             Light::Environment { radiance } => {
-                PI * PI * scene_radius * scene_radius * luminance(*radiance)
+                4.0 * PI * PI * scene_radius * scene_radius * luminance(*radiance)
             }
         }
     }
@@ -104,6 +109,11 @@ impl Light {
 
     /// Samples incident illumination at `p` (surface point, normal used only to pick
     /// environment samples). `u` uniform in the unit square. `scene_radius` for infinite lights.
+    ///
+    /// Triangle lights are sampled uniformly in the solid angle they subtend at `p` when
+    /// that lies in [`spherical::MIN_SPHERICAL_SAMPLE_AREA`,
+    /// `spherical::MAX_SPHERICAL_SAMPLE_AREA`], uniformly by area otherwise; [`Light::pdf_li`]
+    /// makes the same choice from the same (p, triangle).
     pub fn sample_li(&self, p: Vec3, u: Vec2, scene_radius: f32) -> Option<LightSample> {
         match self {
             Light::Point { p: lp, intensity } => {
@@ -172,7 +182,16 @@ impl Light {
                 two_sided,
                 ..
             } => {
-                let (b1, b2) = warps::sample_uniform_triangle(u);
+                let omega = triangle_solid_angle(p, *p0, *e1, *e2);
+                let spherical = use_solid_angle_sampling(omega);
+                if spherical && !*two_sided && (p - *p0).dot(*n) <= 0.0 {
+                    return None;
+                }
+                let (b1, b2) = if spherical {
+                    sample_spherical_triangle(p, *p0, *e1, *e2, [u.x, u.y])?
+                } else {
+                    warps::sample_uniform_triangle(u)
+                };
                 let lp = *p0 + *e1 * b1 + *e2 * b2;
                 let d = lp - p;
                 let d2 = d.length_squared();
@@ -180,15 +199,19 @@ impl Light {
                     return None;
                 }
                 let wi = d / d2.sqrt();
-                let cos_l = -wi.dot(*n);
-                if cos_l <= 0.0 && !*two_sided {
-                    return None;
-                }
-                let cos_l = cos_l.abs();
-                if cos_l == 0.0 {
-                    return None;
-                }
-                let pdf = d2 / (cos_l * *area);
+                let pdf = if spherical {
+                    1.0 / omega
+                } else {
+                    let cos_l = -wi.dot(*n);
+                    if cos_l <= 0.0 && !*two_sided {
+                        return None;
+                    }
+                    let cos_l = cos_l.abs();
+                    if cos_l == 0.0 {
+                        return None;
+                    }
+                    d2 / (cos_l * *area)
+                };
                 Some(LightSample {
                     wi,
                     p: lp,
@@ -219,8 +242,22 @@ impl Light {
     pub fn pdf_li(&self, p: Vec3, lp: Vec3) -> f32 {
         match self {
             Light::Triangle {
-                n, area, two_sided, ..
+                p0,
+                e1,
+                e2,
+                n,
+                area,
+                two_sided,
+                ..
             } => {
+                let omega = triangle_solid_angle(p, *p0, *e1, *e2);
+                if use_solid_angle_sampling(omega) {
+                    return if !*two_sided && (p - *p0).dot(*n) <= 0.0 {
+                        0.0
+                    } else {
+                        1.0 / omega
+                    };
+                }
                 let d = lp - p;
                 let d2 = d.length_squared();
                 let cos_l = -d.dot(*n) / d2.sqrt();
@@ -260,6 +297,17 @@ pub fn spot_falloff(cos_theta: f32, cos_inner: f32, cos_outer: f32) -> f32 {
     }
     let s = (cos_theta - cos_outer) / (cos_inner - cos_outer);
     s * s
+}
+
+/// ∫ spot_falloff dω over the sphere: with s = (c − cos_outer)/(cos_inner − cos_outer)
+/// the falloff is 1 for c ≥ cos_inner and s² between the cones, so the integral is
+/// 2π[(1 − cos_inner) + ∫ s² dc] = 2π[(1 − cos_inner) + (cos_inner − cos_outer)/3]
+/// (a hard cone 2π(1 − cos_outer) when the cones coincide or are inverted).
+pub fn spot_solid_angle(cos_inner: f32, cos_outer: f32) -> f32 {
+    if cos_inner <= cos_outer {
+        return 2.0 * PI * (1.0 - cos_outer);
+    }
+    2.0 * PI * ((1.0 - cos_inner) + (cos_inner - cos_outer) / 3.0)
 }
 
 /// Chooses lights in proportion to their power.

@@ -1,11 +1,11 @@
 //! Statistical tests of the BSDF: χ² goodness of fit of `sample` against `pdf`, pdf
 //! normalisation, white-furnace energy, sample/pdf/f consistency, reciprocity, smooth glass.
 
+use crate::chi2::{N_COS, N_PHI, cell_of, integrate_cells, pooled_p_value};
 use chronolux_core::bsdf::{Bsdf, Lobes, TransportMode};
 use chronolux_core::color::Rgb;
 use chronolux_core::math::{Frame, Vec2, Vec3};
 use chronolux_core::sampling::rng::Pcg32;
-use std::f64::consts::PI;
 
 const RAD: TransportMode = TransportMode::Radiance;
 const IMP: TransportMode = TransportMode::Importance;
@@ -57,147 +57,6 @@ fn gltf(base: Rgb, metallic: f32, roughness: f32, specular: f32, transmission: f
     )
 }
 
-// ---------------------------------------------------------------------------------------
-// χ² machinery (after Mitsuba's chi2.py).
-
-/// ln Γ(x) for x > 0 (Lanczos, g = 7, n = 9; ~1e-15 relative).
-fn ln_gamma(x: f64) -> f64 {
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        return (PI / (PI * x).sin()).ln() - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + 7.5;
-    for (i, c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * (2.0 * PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
-}
-
-/// Regularised upper incomplete gamma Q(a, x) = Γ(a, x)/Γ(a) (series for x < a + 1,
-/// Lentz continued fraction otherwise; Numerical Recipes §6.2).
-fn gamma_q(a: f64, x: f64) -> f64 {
-    if x <= 0.0 {
-        return 1.0;
-    }
-    let ln_pre = -x + a * x.ln() - ln_gamma(a);
-    if x < a + 1.0 {
-        let (mut ap, mut del) = (a, 1.0 / a);
-        let mut sum = del;
-        for _ in 0..10_000 {
-            ap += 1.0;
-            del *= x / ap;
-            sum += del;
-            if del.abs() < sum.abs() * 1e-15 {
-                break;
-            }
-        }
-        1.0 - sum * ln_pre.exp()
-    } else {
-        const TINY: f64 = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / TINY;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..10_000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < TINY {
-                d = TINY;
-            }
-            c = b + an / c;
-            if c.abs() < TINY {
-                c = TINY;
-            }
-            d = 1.0 / d;
-            let del = d * c;
-            h *= del;
-            if (del - 1.0).abs() < 1e-15 {
-                break;
-            }
-        }
-        ln_pre.exp() * h
-    }
-}
-
-#[test]
-fn incomplete_gamma_matches_known_values() {
-    // Q(1, x) = e^−x; Q(1/2, x) = erfc(√x); erfc(1) = 0.157299207050285. Tolerances: the
-    // series/fraction stop at 1e-15 relative; 1e-10 leaves room for ln Γ rounding.
-    for x in [0.1, 1.0, 3.0, 20.0] {
-        assert!((gamma_q(1.0, x) - (-x).exp()).abs() < 1e-10);
-    }
-    assert!((gamma_q(0.5, 1.0) - 0.157_299_207_050_285).abs() < 1e-10);
-    // χ² with 10 dof at 18.307 has upper tail 0.05 (standard table value, 4 digits).
-    assert!((gamma_q(5.0, 18.307 / 2.0) - 0.05).abs() < 1e-4);
-    assert!((ln_gamma(10.0) - 362_880f64.ln()).abs() < 1e-10);
-}
-
-/// Histogram resolution over (cos θ, φ): odd in cos θ (Mitsuba's choice; the equator lies
-/// inside the middle row, so both hemispheres' pdfs are integrated consistently), and
-/// `SUB` (even) Simpson sub-intervals per cell and axis for the expected counts.
-const N_COS: usize = 31;
-const N_PHI: usize = 61;
-const SUB: usize = 16;
-
-fn cell_of(w: Vec3) -> usize {
-    let z = w.z.clamp(-1.0, 1.0) as f64;
-    let phi = (w.y as f64).atan2(w.x as f64).rem_euclid(2.0 * PI);
-    let i = (((z + 1.0) / 2.0 * N_COS as f64) as usize).min(N_COS - 1);
-    let j = ((phi / (2.0 * PI) * N_PHI as f64) as usize).min(N_PHI - 1);
-    i * N_PHI + j
-}
-
-/// ∫ pdf over every cell (composite Simpson in (cos θ, φ), where dω = dcos θ dφ).
-fn integrate_cells(pdf: impl Fn(Vec3) -> f64) -> Vec<f64> {
-    let (nz, np) = (N_COS * SUB + 1, N_PHI * SUB + 1);
-    let (hz, hp) = (2.0 / (N_COS * SUB) as f64, 2.0 * PI / (N_PHI * SUB) as f64);
-    let mut vals = vec![0.0f64; nz * np];
-    for a in 0..nz {
-        let z = (-1.0 + a as f64 * hz).clamp(-1.0, 1.0);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        for b in 0..np {
-            let phi = b as f64 * hp;
-            let w = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
-            vals[a * np + b] = pdf(w);
-        }
-    }
-    let sw = |k: usize| {
-        if k == 0 || k == SUB {
-            1.0
-        } else if k % 2 == 1 {
-            4.0
-        } else {
-            2.0
-        }
-    };
-    let mut cells = vec![0.0; N_COS * N_PHI];
-    for i in 0..N_COS {
-        for j in 0..N_PHI {
-            let mut s = 0.0;
-            for a in 0..=SUB {
-                for b in 0..=SUB {
-                    s += sw(a) * sw(b) * vals[(i * SUB + a) * np + j * SUB + b];
-                }
-            }
-            cells[i * N_PHI + j] = s * hz * hp / 9.0;
-        }
-    }
-    cells
-}
-
 struct FitResult {
     p_value: f64,
     /// ∫ pdf over the sphere (quadrature).
@@ -223,42 +82,10 @@ fn chi2_fit(bsdf: &Bsdf, wo: Vec3, n: usize, seed: u64) -> FitResult {
     let cells = integrate_cells(|w| bsdf.pdf(wo, w) as f64);
     let integral: f64 = cells.iter().sum();
     let exp: Vec<f64> = cells.iter().map(|c| c * n as f64).collect();
-    // Pool cells with expected count < 5 (the χ² approximation needs it).
-    let mut idx: Vec<usize> = (0..exp.len()).collect();
-    idx.sort_by(|&a, &b| exp[a].total_cmp(&exp[b]));
-    let (mut chsq, mut dof) = (0.0, 0i64);
-    let (mut pool_obs, mut pool_exp, mut pooled) = (0.0, 0.0, 0);
-    for &i in &idx {
-        if exp[i] == 0.0 && obs[i] > 0.0 {
-            return FitResult {
-                p_value: 0.0,
-                integral,
-                success: ok as f64 / n as f64,
-                n,
-            };
-        }
-        if exp[i] < 5.0 || (pooled > 0 && pool_exp < 5.0) {
-            pool_obs += obs[i];
-            pool_exp += exp[i];
-            pooled += 1;
-        } else {
-            chsq += (obs[i] - exp[i]).powi(2) / exp[i];
-            dof += 1;
-        }
-    }
-    if pool_exp > 0.0 {
-        chsq += (pool_obs - pool_exp) * (pool_obs - pool_exp) / pool_exp;
-        dof += 1;
-    }
     // Samples lost by `sample` (below the horizon, TIR) are the mass ∫pdf < 1 misses:
     // one more cell, observed n − ok, expected n(1 − ∫pdf).
-    let (lost_obs, lost_exp) = ((n - ok) as f64, n as f64 * (1.0 - integral));
-    if lost_exp >= 5.0 {
-        chsq += (lost_obs - lost_exp).powi(2) / lost_exp;
-        dof += 1;
-    }
-    dof -= 1;
-    let p_value = gamma_q(dof as f64 / 2.0, chsq / 2.0);
+    let lost = ((n - ok) as f64, n as f64 * (1.0 - integral));
+    let p_value = pooled_p_value(&obs, &exp, Some(lost));
     FitResult {
         p_value,
         integral,

@@ -1,3 +1,5 @@
 //! The one integration-test binary of chronolux-core (statistical tests).
 
 mod bsdf;
+mod chi2;
+mod light;

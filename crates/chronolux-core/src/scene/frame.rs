@@ -432,6 +432,18 @@ impl FrameBuilder {
         }
     }
 
+    /// Geometry-id ranges of each mesh node (a node's primitives have consecutive ids).
+    fn node_groups(&self) -> Vec<(NodeId, std::ops::Range<usize>)> {
+        let mut out: Vec<(NodeId, std::ops::Range<usize>)> = Vec::new();
+        for (gid, s) in self.slots.iter().enumerate() {
+            match out.last_mut() {
+                Some((n, r)) if *n == s.node => r.end = gid + 1,
+                _ => out.push((s.node, gid..gid + 1)),
+            }
+        }
+        out
+    }
+
     fn build_persistent(&mut self) {
         let pose = anim::pose_at(&self.desc, self.anim, 0.0);
         let mut items = Vec::new();
@@ -449,13 +461,8 @@ impl FrameBuilder {
         }
         // Rigid nodes: one object-space BLAS per mesh, shared by nodes using it.
         let mut by_mesh: HashMap<u32, Arc<Blas>> = HashMap::new();
-        let mut gid = 0usize;
-        while gid < self.slots.len() {
-            let node = self.slots[gid].node;
-            let n_prims = self.slots[gid..]
-                .iter()
-                .take_while(|s| s.node == node)
-                .count();
+        for (node, range) in self.node_groups() {
+            let (gid, n_prims) = (range.start, range.len());
             if self.slots[gid].class == Class::Rigid {
                 let mesh = self.desc.nodes[node.index()].mesh.unwrap().0;
                 let mut items = Vec::new();
@@ -472,7 +479,6 @@ impl FrameBuilder {
                     .clone();
                 self.rigid.push((node, blas, gid as u32));
             }
-            gid += n_prims;
         }
     }
 
@@ -494,13 +500,8 @@ impl FrameBuilder {
             instances.push(Instance::new(blas.clone(), m).with_geometry_base(*base));
         }
         // Deformed nodes: world-space data and a fresh BLAS per node.
-        let mut gid = 0usize;
-        while gid < self.slots.len() {
-            let node = self.slots[gid].node;
-            let n_prims = self.slots[gid..]
-                .iter()
-                .take_while(|s| s.node == node)
-                .count();
+        for (_, range) in self.node_groups() {
+            let (gid, n_prims) = (range.start, range.len());
             if self.slots[gid].class == Class::Deformed {
                 let mut items = Vec::new();
                 let mut filter = false;
@@ -517,7 +518,6 @@ impl FrameBuilder {
                         .with_geometry_base(gid as u32),
                 );
             }
-            gid += n_prims;
         }
         // Instance index of each rigid geometry (for world-space light triangles): rigid
         // instances follow the static one, in `self.rigid` order.

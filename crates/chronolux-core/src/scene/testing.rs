@@ -4,63 +4,20 @@ use super::desc::{
     CameraDesc, CameraId, Material, MaterialId, Mesh, MeshId, Node, NodeId, Primitive, Projection,
     SceneDesc, Trs,
 };
+use super::stage;
 use crate::color::Rgb;
-use crate::math::{Vec2, Vec3};
-use std::f32::consts::PI;
 
-/// A UV sphere of `radius` around the origin with `seg` segments and `rings` rings,
-/// normals outward (or inward, with the winding reversed, when `inward`).
+/// A UV sphere (see [`stage::uv_sphere`]) with normals outward, or inward with the winding
+/// reversed when `inward`.
 pub fn uv_sphere(radius: f32, seg: u32, rings: u32, inward: bool) -> Primitive {
-    let mut positions = Vec::new();
-    let mut normals = Vec::new();
-    let mut uvs = Vec::new();
-    for r in 0..=rings {
-        let theta = PI * r as f32 / rings as f32;
-        for s in 0..=seg {
-            let phi = 2.0 * PI * s as f32 / seg as f32;
-            let n = Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                -theta.sin() * phi.sin(),
-            );
-            positions.push(n * radius);
-            normals.push(if inward { -n } else { n });
-            uvs.push(Vec2::new(s as f32 / seg as f32, r as f32 / rings as f32));
+    let mut p = stage::uv_sphere(radius, seg, rings);
+    if inward {
+        p.indices.iter_mut().for_each(|t| t.swap(1, 2));
+        if let Some(n) = p.normals.as_mut() {
+            n.iter_mut().for_each(|v| *v = -*v);
         }
     }
-    let mut indices = Vec::new();
-    let w = seg + 1;
-    for r in 0..rings {
-        for s in 0..seg {
-            let (a, b, c, d) = (
-                r * w + s,
-                r * w + s + 1,
-                (r + 1) * w + s,
-                (r + 1) * w + s + 1,
-            );
-            // Outward-facing counter-clockwise order; the pole rows lose a degenerate triangle.
-            let mut tris = vec![];
-            if r != 0 {
-                tris.push([a, c, b]);
-            }
-            if r != rings - 1 {
-                tris.push([b, c, d]);
-            }
-            for mut t in tris {
-                if inward {
-                    t.swap(1, 2);
-                }
-                indices.push(t);
-            }
-        }
-    }
-    Primitive {
-        positions,
-        normals: Some(normals),
-        uvs: Some(uvs),
-        indices,
-        ..Default::default()
-    }
+    p
 }
 
 /// A scene with one mesh node and one camera node.

@@ -11,6 +11,7 @@ use crate::sampling::distrib::Distribution1D;
 use crate::sampling::warps;
 use std::f32::consts::PI;
 
+pub mod emit;
 pub mod spherical;
 use spherical::{sample_spherical_triangle, triangle_solid_angle, use_solid_angle_sampling};
 

@@ -73,7 +73,8 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 64, value_name = "N")]
     pub spp: u32,
     /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384). Default: 512 wide, height
-    /// from the camera's aspect ratio (square when the camera gives none).
+    /// from the camera's aspect ratio (square when the camera gives none); 256x256 for the
+    /// built-in demo.
     #[arg(long, value_name = "WxH", allow_hyphen_values = true)]
     pub resolution: Option<String>,
     /// Longest light path in segments from the camera, as Mitsuba's max_depth: 1 shows

@@ -135,6 +135,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     let (w, h) = match requested_resolution {
         Some(r) => r,
+        // The built-in demo is meant to finish in a few minutes on a laptop: 256² by default.
+        None if args.scene.scene.is_none() => (256, 256),
         None => default_resolution(&input.desc, &input.camera),
     };
     let sink = FrameSink::create(&args.output)?;

@@ -1,3 +1,4 @@
 //! The one integration-test binary of chronolux-core (statistical tests).
 
 mod bsdf;
+mod metrics;

@@ -61,7 +61,7 @@ fn identical_images_give_zero() {
 fn constant_offset_gives_computed_values() {
     // Reference: half the pixels 0.5, half 1.0; test = reference + 0.25 everywhere.
     let r: Vec<Rgb> = (0..100)
-        .map(|i| Rgb::splat(if i % 2 == 0 { 0.5 } else { 1.0 }))
+        .map(|i| Rgb::splat(if i.is_multiple_of(2) { 0.5 } else { 1.0 }))
         .collect();
     let t: Vec<Rgb> = r.iter().map(|c| *c + Rgb::splat(0.25)).collect();
     let d2 = 0.0625f64;
@@ -79,7 +79,7 @@ fn flicker_of_static_noisy_sequence_against_static_reference() {
     // frame 0 = 0.5 + 0.1 s, frame 1 = 0.5 − 0.1 s with s = ±1, so |ΔI − ΔR| = 0.2 and
     // flicker = 0.2 / 0.5 = 0.4; without reference mean |ΔI| = 0.2.
     let r = vec![Rgb::splat(0.5); 64];
-    let s = |i: usize| if i % 3 == 0 { 1.0 } else { -1.0 };
+    let s = |i: usize| if i.is_multiple_of(3) { 1.0 } else { -1.0 };
     let i0: Vec<Rgb> = (0..64).map(|i| Rgb::splat(0.5 + 0.1 * s(i))).collect();
     let i1: Vec<Rgb> = (0..64).map(|i| Rgb::splat(0.5 - 0.1 * s(i))).collect();
     assert!((flicker(&i0, &i1, &r, &r) - 0.4).abs() < 1e-6);

@@ -60,7 +60,7 @@ fn identical_images_give_zero() {
 #[test]
 fn constant_offset_gives_computed_values() {
     // Reference: half the pixels 0.5, half 1.0; test = reference + 0.25 everywhere.
-    let r: Vec<Rgb> = (0..100)
+    let r: Vec<Rgb> = (0..100usize)
         .map(|i| Rgb::splat(if i.is_multiple_of(2) { 0.5 } else { 1.0 }))
         .collect();
     let t: Vec<Rgb> = r.iter().map(|c| *c + Rgb::splat(0.25)).collect();

@@ -611,6 +611,111 @@ mod tests {
             .join(": ")
     }
 
+    /// Python with `flip_evaluator` (`CHRONOLUX_FLIP_PYTHON`, else `python3`), or `None`.
+    fn flip_python() -> Option<String> {
+        let py = std::env::var("CHRONOLUX_FLIP_PYTHON").unwrap_or_else(|_| "python3".into());
+        let ok = std::process::Command::new(&py)
+            .args(["-c", "import flip_evaluator"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if !ok {
+            eprintln!(
+                "SKIPPED: `{py} -c \"import flip_evaluator\"` fails; install it \
+                 (`python3 -m pip install --user flip-evaluator`) or set CHRONOLUX_FLIP_PYTHON"
+            );
+        }
+        ok.then_some(py)
+    }
+
+    /// Our FLIP means agree with flip-evaluator's to 1e-3 on the Mitsuba reference of the
+    /// shared Cornell scene against deterministic noisy versions of it (EXRs both ways).
+    #[test]
+    fn flip_matches_flip_evaluator_on_mitsuba_reference() {
+        let refs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/peers/mitsuba-refs");
+        let rp = refs.join("mitsuba_f00.exr");
+        if !rp.exists() {
+            eprintln!("SKIPPED: {} not found", rp.display());
+            return;
+        }
+        let Some(py) = flip_python() else { return };
+        let r = read_exr(&rp).unwrap();
+        let other = read_exr(refs.join("mitsuba_f24.exr")).ok();
+        let dir = tmp("flip-py");
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state = chronolux_core::sampling::mix64(state.wrapping_add(0x9e37_79b9));
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut cases = Vec::new();
+        for amp in [0.05f32, 0.2, 0.6] {
+            let px = r
+                .pixels
+                .iter()
+                .map(|c| {
+                    // Heavy-tailed multiplicative noise, like few-sample path tracing.
+                    let u = Rgb::new(next(), next(), next());
+                    (*c * (Rgb::ONE + (u * 2.0 - Rgb::ONE) * amp)
+                        + Rgb::splat(amp * 0.05 * next().powi(8) * 4.0))
+                    .max(Rgb::ZERO)
+                })
+                .collect();
+            cases.push((
+                format!("noise {amp}"),
+                Image::from_pixels(r.width, r.height, px),
+            ));
+        }
+        if let Some(o) = other {
+            cases.push(("frame 24".into(), o));
+        }
+        let ppd = flip::default_ppd();
+        for (name, t) in &cases {
+            let tp = dir.join("t.exr");
+            write_exr(&tp, t).unwrap();
+            let t = read_exr(&tp).unwrap();
+            let (w, h) = (r.width as usize, r.height as usize);
+            let ours_hdr = flip::flip_hdr(&r.pixels, &t.pixels, w, h, &Default::default()).mean();
+            let ours_ldr = flip::flip_ldr(&r.pixels, &t.pixels, w, h, ppd).mean();
+            let script = format!(
+                "import numpy as np, flip_evaluator as fl\n\
+                 r=np.ascontiguousarray(np.maximum(fl.load(r'{}'),0),dtype=np.float32)\n\
+                 t=np.ascontiguousarray(np.maximum(fl.load(r'{}'),0),dtype=np.float32)\n\
+                 h=fl.evaluate(r,t,'HDR',inputsRGB=False,applyMagma=False)[1]\n\
+                 l=fl.evaluate(np.minimum(r,1),np.minimum(t,1),'LDR',inputsRGB=False,applyMagma=False)[1]\n\
+                 print(repr(float(h)), repr(float(l)))\n",
+                rp.display(),
+                tp.display()
+            );
+            let out = std::process::Command::new(&py)
+                .args(["-c", &script])
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let text = String::from_utf8_lossy(&out.stdout);
+            let v: Vec<f64> = text
+                .split_whitespace()
+                .map(|s| s.parse().unwrap())
+                .collect();
+            eprintln!(
+                "{name}: HDR-FLIP {ours_hdr:.6} vs {:.6}, LDR-FLIP {ours_ldr:.6} vs {:.6}",
+                v[0], v[1]
+            );
+            assert!(
+                (ours_hdr - v[0]).abs() < 1e-3,
+                "{name}: HDR {ours_hdr} vs {}",
+                v[0]
+            );
+            assert!(
+                (ours_ldr - v[1]).abs() < 1e-3,
+                "{name}: LDR {ours_ldr} vs {}",
+                v[1]
+            );
+        }
+    }
+
     #[test]
     fn mismatched_sizes_error_clearly() {
         let (t, r) = (tmp("size-t"), tmp("size-r"));

@@ -20,8 +20,9 @@ pub struct CompareArgs {
     pub test_dir: PathBuf,
     /// Folder of the reference frames (linear EXRs, matched to the test frames by number).
     pub ref_dir: PathBuf,
-    /// Write one CSV row per frame: frame,relmse,rmse,psnr,flip_hdr,flip_ldr,flicker
-    /// (flicker empty when frame − 1 is not compared).
+    /// Write one CSV row per frame: frame,relmse,rmse,psnr,flip_hdr,flip_ldr,flicker,
+    /// flicker_noref (the flickers empty when frame − 1 is not compared; flicker_noref is
+    /// mean |I_t − I_{t−1}| of the test alone).
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
     /// Write an SVG plot of FLIP, relMSE and flicker per frame.
@@ -55,6 +56,9 @@ pub struct FrameMetrics {
     pub flip_ldr: f64,
     /// Against the reference; `None` when frame − 1 is not compared.
     pub flicker: Option<f64>,
+    /// Without reference: mean |I_t − I_{t−1}| of the test frames (absolute; the truth is 0
+    /// on a static scene); `None` when frame − 1 is not compared.
+    pub flicker_noref: Option<f64>,
 }
 
 /// Frame number → path of every `*.exr` in `dir` whose stem ends with digits.
@@ -160,6 +164,12 @@ pub fn compare_frames(
             )),
             _ => None,
         };
+        let flicker_noref = match &prev {
+            Some((pf, pt, _)) if *pf + 1 == f => {
+                Some(metrics::flicker_no_reference(&pt.pixels, &t.pixels))
+            }
+            _ => None,
+        };
         let m = FrameMetrics {
             frame: f,
             relmse: metrics::rel_mse(&t.pixels, &r.pixels),
@@ -168,6 +178,7 @@ pub fn compare_frames(
             flip_hdr: hdr.mean(),
             flip_ldr: ldr.mean(),
             flicker,
+            flicker_noref,
         };
         each(&m, &t, &r, &hdr)?;
         out.push(m);
@@ -228,18 +239,19 @@ pub fn summarize(m: &[FrameMetrics]) -> Summary {
 }
 
 pub fn csv(m: &[FrameMetrics]) -> String {
-    let mut s = String::from("frame,relmse,rmse,psnr,flip_hdr,flip_ldr,flicker\n");
+    let mut s = String::from("frame,relmse,rmse,psnr,flip_hdr,flip_ldr,flicker,flicker_noref\n");
     for x in m {
         let _ = writeln!(
             s,
-            "{},{:e},{:e},{},{},{},{}",
+            "{},{:e},{:e},{},{},{},{},{}",
             x.frame,
             x.relmse,
             x.rmse,
             x.psnr,
             x.flip_hdr,
             x.flip_ldr,
-            x.flicker.map(|v| v.to_string()).unwrap_or_default()
+            x.flicker.map(|v| v.to_string()).unwrap_or_default(),
+            x.flicker_noref.map(|v| v.to_string()).unwrap_or_default()
         );
     }
     s
@@ -768,6 +780,8 @@ mod tests {
         assert_eq!(rows[0][0], "frame");
         assert_eq!(rows.len(), 4);
         assert_eq!(rows[1][6], "", "no flicker for the first frame");
+        let noref: f64 = rows[2][7].parse().unwrap();
+        assert!((noref - 0.2).abs() < 1e-6, "{noref}");
         let rel: f64 = rows[2][1].parse().unwrap();
         assert!((rel - 0.01 / 0.26).abs() < 1e-6, "{rel}");
         let fl: f64 = rows[2][6].parse().unwrap();

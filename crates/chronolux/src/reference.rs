@@ -57,8 +57,9 @@ pub struct ReferenceArgs {
     /// Frames per second of the animation timeline.
     #[arg(long, default_value_t = 24.0, value_name = "FPS")]
     pub fps: f32,
-    /// Stop a frame when its estimated remaining relMSE (see `chronolux reference --help`
-    /// docs: mean ((A − B)/2)² / (M² + 0.01) of the two half images) is at most this.
+    /// Stop a frame when its estimated remaining relMSE is at most this. The estimate is
+    /// mean ((A − B)/2)² / (M² + 0.01) over the two independent half images A, B and their
+    /// average M (the expected relMSE of M, since Var M = E[(A − B)²]/4).
     #[arg(long, default_value_t = 1e-4, value_name = "E")]
     pub target_error: f64,
     /// Most samples per pixel per frame (both halves together); a frame that reaches it

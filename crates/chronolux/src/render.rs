@@ -158,10 +158,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
         settings,
         serde_json::to_value(&summary)?,
     );
-    if args.resume {
-        if let Some(earlier) = sink.read_manifest()? {
-            manifest.merge_earlier(&earlier);
-        }
+    if args.resume
+        && let Some(earlier) = sink.read_manifest()?
+    {
+        manifest.merge_earlier(&earlier);
     }
 
     let mp = MultiProgress::new();

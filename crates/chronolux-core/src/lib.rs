@@ -33,6 +33,7 @@ pub mod geometry;
 pub mod light;
 pub mod material;
 pub mod math;
+pub mod metrics;
 pub mod parallel;
 pub mod sampling;
 pub mod scene;

@@ -1,5 +1,9 @@
 //! The one integration-test binary of chronolux-core (statistical tests).
 
 mod bsdf;
+<<<<<<< HEAD
 mod chi2;
 mod light;
+=======
+mod metrics;
+>>>>>>> yard

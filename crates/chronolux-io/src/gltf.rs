@@ -736,10 +736,8 @@ impl Loader<'_> {
             .any(|m| m.emissive.max_element() > 0.0);
         if desc.lights.is_empty() && !has_emission {
             desc.environment = Some(Rgb::splat(1.0));
-            self.warnings.push(
-                "scene has no light (no punctual light, no emissive material): added a default uniform white environment light"
-                    .into(),
-            );
+            self.warnings
+                .push(chronolux_core::scene::desc::DEFAULT_ENVIRONMENT_WARNING.into());
         }
         desc.warnings = self.warnings;
         Ok(desc)

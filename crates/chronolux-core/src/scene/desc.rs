@@ -40,6 +40,10 @@ typed_id!(
     AnimationId
 );
 
+/// The warning a loader gives when it adds the default environment to a scene without
+/// lights (a stage that brings its own lights removes it again).
+pub const DEFAULT_ENVIRONMENT_WARNING: &str = "scene has no light (no punctual light, no emissive material): added a default uniform white environment light";
+
 /// The whole scene.
 #[derive(Clone, Debug, Default)]
 pub struct SceneDesc {

@@ -282,7 +282,13 @@ pub fn cornell_stage(content: SceneDesc) -> SceneDesc {
             a.channels.iter_mut().for_each(|c| c.node = nid(c.node));
             a
         }));
-    d.warnings.extend(content.warnings);
+    // The room lights the content: a default environment the loader added is gone.
+    d.warnings.extend(
+        content
+            .warnings
+            .into_iter()
+            .filter(|w| w != super::desc::DEFAULT_ENVIRONMENT_WARNING),
+    );
     d
 }
 

@@ -37,8 +37,7 @@ use anyhow::{Context, Result, bail};
 use chronolux_core::color::Rgb;
 use chronolux_core::metrics::REL_MSE_EPS;
 use chronolux_core::sampling::hash_words;
-use chronolux_core::scene::desc::{Projection, SceneDesc};
-use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};
+use chronolux_core::scene::frame::{FrameBuilder, FrameScene};
 use chronolux_io::image::{Image, write_exr};
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest, frame_stem};
 use chronolux_render::integrator::Integrator;
@@ -183,25 +182,6 @@ pub fn render_converged(
     }
 }
 
-fn default_resolution(desc: &SceneDesc, camera: &CameraChoice) -> (u32, u32) {
-    let cam = match camera {
-        CameraChoice::Named(n) => desc.cameras.iter().find(|c| &c.name == n),
-        CameraChoice::First => desc
-            .topological_order()
-            .into_iter()
-            .find_map(|n| desc.nodes[n.index()].camera)
-            .map(|c| &desc.cameras[c.index()]),
-    };
-    let aspect = match cam.map(|c| c.projection) {
-        Some(Projection::Perspective {
-            aspect: Some(a), ..
-        }) if a > 0.0 && a.is_finite() => a,
-        Some(Projection::Orthographic { xmag, ymag }) if xmag > 0.0 && ymag > 0.0 => xmag / ymag,
-        _ => 1.0,
-    };
-    (512, ((512.0 / aspect).round() as u32).clamp(1, 16384))
-}
-
 pub fn run(args: ReferenceArgs) -> Result<()> {
     if !(args.target_error > 0.0 && args.target_error.is_finite()) {
         bail!("--target-error must be a positive relMSE, e.g. 1e-4");
@@ -243,7 +223,7 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
     }
     let (w, h) = match &args.resolution {
         Some(r) => parse_resolution(r)?,
-        None => default_resolution(&input.desc, &input.camera),
+        None => crate::render::default_resolution(&input.desc, &input.camera),
     };
     let sink = FrameSink::create(&args.output)?;
     let settings = PathSettings {

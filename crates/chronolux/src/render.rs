@@ -68,7 +68,7 @@ pub fn last_frame(
     Some((desc.animations[a.index()].duration() * fps + 1e-3).floor() as u32)
 }
 
-fn default_resolution(desc: &SceneDesc, camera: &CameraChoice) -> (u32, u32) {
+pub fn default_resolution(desc: &SceneDesc, camera: &CameraChoice) -> (u32, u32) {
     let cam = scene_input::chosen_camera(desc, camera);
     let aspect = match cam.map(|c| c.projection) {
         Some(Projection::Perspective {

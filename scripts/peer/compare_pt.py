@@ -10,10 +10,11 @@ For each round r and frame f, in this order: ours, then Mitsuba (each a fresh pr
   ours:    chronolux render SCENE --frames f --spp N --resolution RxR --max-depth D
            --threads T --seed r --output WORK/ours_r{r}_f{f} --no-preview
            seconds = run.json's wall_s of the frame (frame build + render + EXR/PNG write;
-           scene loading excluded)
+           scene loading excluded); process_cpu_s = CPU seconds of the whole process
   Mitsuba: mitsuba_frame.py --frame f --spp N ... --seed 1000*r+f+1
            seconds = its timed mi.render() (after a 1-spp warm-up render that compiles
-           the kernel; excludes loading, the per-frame BVH update and the EXR write)
+           the kernel; excludes loading, the per-frame BVH update and the EXR write);
+           cpu_s = its process CPU seconds during the timed render
 Both images are scored against REFS/mitsuba_fNN.exr with relMSE (relmse.py's formula:
 mean of (I-R)^2/(R^2+0.01)); efficiency = 1 / (seconds x relMSE). Prints one JSON document
 with every measurement, per-frame medians over rounds, and the ratios ours/Mitsuba.
@@ -21,6 +22,7 @@ with every measurement, per-frame medians over rounds, and the ratios ours/Mitsu
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -31,6 +33,11 @@ sys.path.insert(0, HERE)
 sys.path.insert(0, os.path.join(HERE, "harness"))
 from exr_io import read_exr  # noqa: E402
 from relmse import hdr_flip, rel_mse  # noqa: E402
+
+
+def children_cpu_s():
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
 
 
 def run(cmd):
@@ -74,14 +81,16 @@ def main():
             # ours
             od = os.path.join(a.work, f"ours_r{r}_f{f}")
             t0 = time.perf_counter()
+            c0 = children_cpu_s()
             run([a.chronolux, "render", a.scene, "--frames", str(f), "--spp", str(a.spp),
                  "--resolution", f"{a.res}x{a.res}", "--max-depth", str(a.max_depth),
                  "--threads", str(a.threads), "--seed", str(r), "--output", od, "--no-preview"])
             proc_s = time.perf_counter() - t0
+            proc_cpu_s = children_cpu_s() - c0
             man = json.load(open(os.path.join(od, "run.json")))
             rec = next(x for x in man["frames"] if x["frame"] == f)
             ours = {"who": "chronolux", "round": r, "frame": f, "seconds": rec["wall_s"],
-                    "process_s": proc_s, "loadavg1": os.getloadavg()[0],
+                    "process_s": proc_s, "process_cpu_s": proc_cpu_s, "loadavg1": os.getloadavg()[0],
                     **score(os.path.join(od, rec["file_exr"]), ref, a.flip)}
             rows.append(ours)
             print(json.dumps(ours), file=sys.stderr, flush=True)

@@ -193,44 +193,10 @@ pub struct Hit {
     pub b2: f32,
 }
 
-/// Scenes with at most this many instances skip the TLAS: a ray tests the instances' world
-/// boxes in order (cheaper than a CWBVH traversal over a handful of boxes).
-const LINEAR_TLAS_MAX: usize = 4;
-
-/// Robust ray-box test (pbrt-v4's `Bounds3::IntersectP`): `inv` = 1/d per axis; far
-/// distances are enlarged by 2·γ(3) so rounding never rejects a box the ray touches. An
-/// axis giving NaN (0·∞: origin on the slab's plane, ray parallel to it) does not
-/// constrain the interval.
-#[inline(always)]
-fn ray_hits_box(o: Vec3A, inv: Vec3A, b: &Bounds3, tmax: f32) -> bool {
-    const GAMMA3_2: f32 = 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
-    let (mut t0, mut t1) = (0.0f32, tmax);
-    for a in 0..3 {
-        let mut tn = (b.min[a] - o[a]) * inv[a];
-        let mut tf = (b.max[a] - o[a]) * inv[a];
-        if tn > tf {
-            std::mem::swap(&mut tn, &mut tf);
-        }
-        tf *= 1.0 + GAMMA3_2;
-        if tn > t0 {
-            t0 = tn;
-        }
-        if tf < t1 {
-            t1 = tf;
-        }
-        if t0 > t1 {
-            return false;
-        }
-    }
-    true
-}
-
 /// The scene's acceleration structure for one frame.
 pub struct Accel {
     instances: Vec<Instance>,
     tlas: Option<CwBvh>,
-    /// World boxes of the instances when there is no TLAS (≤ [`LINEAR_TLAS_MAX`] of them).
-    boxes: Vec<Bounds3>,
     pub bounds: Bounds3,
 }
 
@@ -252,7 +218,7 @@ impl Accel {
                 }
             })
             .collect();
-        let tlas = if instances.len() > LINEAR_TLAS_MAX {
+        let tlas = if instances.len() > 1 {
             let aabbs: Vec<Aabb> = boxes
                 .iter()
                 .map(|b| Aabb {
@@ -268,11 +234,9 @@ impl Accel {
         } else {
             None
         };
-        let boxes = if tlas.is_none() { boxes } else { vec![] };
         Accel {
             instances,
             tlas,
-            boxes,
             bounds,
         }
     }
@@ -317,35 +281,15 @@ impl Accel {
             })
         };
         match &self.tlas {
-            None if self.instances.len() == 1 => {
-                local(&self.instances[0], ray.tmax).map(|(t, tri, b1, b2)| Hit {
+            None => {
+                let inst = self.instances.first()?;
+                local(inst, ray.tmax).map(|(t, tri, b1, b2)| Hit {
                     t,
                     instance: 0,
                     tri,
                     b1,
                     b2,
                 })
-            }
-            None => {
-                let inv = Vec3A::ONE / (d + Vec3A::ZERO);
-                let mut best: Option<Hit> = None;
-                let mut tmax = ray.tmax;
-                for (i, (inst, b)) in self.instances.iter().zip(&self.boxes).enumerate() {
-                    if !ray_hits_box(o, inv, b, tmax) {
-                        continue;
-                    }
-                    if let Some((t, tri, b1, b2)) = local(inst, tmax) {
-                        tmax = t;
-                        best = Some(Hit {
-                            t,
-                            instance: i as u32,
-                            tri,
-                            b1,
-                            b2,
-                        });
-                    }
-                }
-                best
             }
             Some(tlas) => {
                 let mut best = None;
@@ -395,16 +339,7 @@ impl Accel {
             }
         };
         match &self.tlas {
-            None if self.instances.len() <= 1 => {
-                self.instances.first().is_some_and(|i| local(i, ray.tmax))
-            }
-            None => {
-                let inv = Vec3A::ONE / (d + Vec3A::ZERO);
-                self.instances
-                    .iter()
-                    .zip(&self.boxes)
-                    .any(|(inst, b)| ray_hits_box(o, inv, b, ray.tmax) && local(inst, ray.tmax))
-            }
+            None => self.instances.first().is_some_and(|i| local(i, ray.tmax)),
             Some(tlas) => !tlas.ray_traverse_miss(oray(o, d, ray.tmax), |r, slot| {
                 if local(
                     &self.instances[tlas.primitive_indices[slot] as usize],
@@ -515,69 +450,6 @@ mod tests {
                 mismatches <= 2,
                 "{mismatches} different triangles at equal t"
             );
-        }
-    }
-
-    /// Both instance paths (linear box tests for ≤ LINEAR_TLAS_MAX instances, the TLAS
-    /// above) give brute force's closest hits and occlusion.
-    #[test]
-    fn linear_and_tlas_instance_paths_equal_brute_force() {
-        let mut r = Pcg32::new(5, 6);
-        let soup = random_soup(&mut r, 200, Vec3::ZERO);
-        let items: Vec<(TriRef, [Vec3; 3])> = soup
-            .iter()
-            .enumerate()
-            .map(|(i, v)| {
-                (
-                    TriRef {
-                        geometry: 0,
-                        triangle: i as u32,
-                    },
-                    *v,
-                )
-            })
-            .collect();
-        let blas = Arc::new(Blas::build(&items, false));
-        for n in [2usize, 3, LINEAR_TLAS_MAX, LINEAR_TLAS_MAX + 1, 7] {
-            let ms: Vec<Affine3A> = (0..n)
-                .map(|k| Affine3A::from_translation(Vec3::new(6.0 * k as f32, 0.0, 2.0 * k as f32)))
-                .collect();
-            let accel = Accel::new(
-                ms.iter()
-                    .enumerate()
-                    .map(|(k, m)| Instance::new(blas.clone(), *m).with_geometry_base(k as u32))
-                    .collect(),
-            );
-            assert_eq!(accel.tlas.is_some(), n > LINEAR_TLAS_MAX);
-            let world: Vec<PreparedTriangle> = ms
-                .iter()
-                .flat_map(|m| {
-                    soup.iter().map(|v| {
-                        let w = v.map(|p| m.transform_point3(p));
-                        PreparedTriangle::new(w[0], w[1], w[2])
-                    })
-                })
-                .collect();
-            for _ in 0..1000 {
-                let o = Vec3::new(
-                    r.next_f32() * 50.0 - 5.0,
-                    r.next_f32() * 14.0 - 2.0,
-                    r.next_f32() * 24.0 - 2.0,
-                );
-                let d = crate::sampling::warps::sample_uniform_sphere(glam::Vec2::new(
-                    r.next_f32(),
-                    r.next_f32(),
-                ));
-                let ray = Ray::new(o, d);
-                let got = accel.intersect(&ray, |_, _, _| true);
-                let want = brute_force_closest(&world, &ray);
-                match (got, want) {
-                    (None, None) => {}
-                    (Some(h), Some((_, t))) => assert!((h.t - t).abs() <= 1e-4 * t.max(1.0)),
-                    (g, w) => panic!("{n} instances: accel {g:?} vs brute force {w:?}"),
-                }
-                assert_eq!(accel.occluded(&ray, |_, _, _| true), want.is_some());
-            }
         }
     }
 }

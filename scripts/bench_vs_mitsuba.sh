@@ -11,7 +11,8 @@
 #   FRAMES=0,12      frames of the path-tracing comparison
 #   ROUNDS=3         interleaved rounds (ours, Mitsuba, ours, Mitsuba, ...)
 #   SPP=64 THREADS=2 MAX_DEPTH=8 RES=256
-#   RAYS=1000000     rays per set of the ray-casting comparison
+#   RAYS=1000000     rays per set of the ray-casting comparison (keep >= 1M: below that
+#                    Mitsuba's per-call overhead dominates its timing)
 #   SKIP_PT=1 / SKIP_RAYS=1 / SKIP_OURS=1   skip a part
 #
 # Writes OUT_DIR/{machine.txt, pt.json, rays_ours_rN.json, rays_mitsuba_<set>_rN.json,

@@ -4,5 +4,6 @@
 pub mod anim;
 pub mod desc;
 pub mod frame;
+pub mod generated;
 pub mod stage;
 pub mod testing;

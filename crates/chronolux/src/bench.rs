@@ -51,6 +51,9 @@ pub enum BenchCommand {
     Build(BuildArgs),
     /// Path-traced samples per second (scene loading and frame building excluded).
     Pt(PtArgs),
+    /// Equal-quality benchmark: time (and flicker) for a method and its baseline to reach
+    /// target HDR-FLIP errors against converged references.
+    Quality(crate::quality::QualityArgs),
 }
 
 /// Scene choice and common settings of `rays` and `build`.
@@ -133,6 +136,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         BenchCommand::Rays(a) => rays(a),
         BenchCommand::Build(a) => build(a),
         BenchCommand::Pt(a) => pt(a),
+        BenchCommand::Quality(a) => crate::quality::run(a),
     }
 }
 

@@ -4,6 +4,7 @@ mod bench;
 mod cli;
 mod compare;
 mod info;
+mod quality;
 mod reference;
 mod render;
 mod scene_input;

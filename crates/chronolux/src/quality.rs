@@ -1,0 +1,397 @@
+//! `chronolux bench quality`: the equal-quality benchmark every temporal technique's
+//! speed-up is quoted from.
+//!
+//! For a method (and its baseline), the effort (samples per pixel; photons for photon
+//! methods) is doubled from `--start-effort` until the sequence reaches each target error
+//! against converged references (HDR-ꟻLIP, mean over frames by default, or the worst
+//! frame with `--criterion max`). Each effort level is a complete, independent render of
+//! every frame, timed in wall-clock and CPU seconds (frame construction included, FLIP
+//! excluded); the time to a target is the time of the first level that reaches it. The
+//! flicker of that level (frame-to-frame differences against the reference's, see
+//! `chronolux_core::metrics`) is reported beside it. The ratio baseline time / method time
+//! is the speed-up.
+
+use crate::cli::SceneArgs;
+use crate::render::{parse_frames, parse_resolution};
+use crate::scene_input;
+use anyhow::{Context, Result, bail};
+use chronolux_core::metrics::{self, flip};
+use chronolux_core::scene::frame::FrameBuilder;
+use chronolux_io::image::read_exr;
+use chronolux_render::pt::PathSettings;
+use chronolux_render::registry::TechniqueConfig;
+use clap::Args;
+use serde::Serialize;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Instant;
+
+#[derive(Args, Debug)]
+pub struct QualityArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Frames to measure: `A..B`, `A..=B` or `N`.
+    #[arg(long, value_name = "RANGE")]
+    pub frames: String,
+    /// Folder of converged reference frames (frame_NNNN.exr), e.g. made by
+    /// `chronolux reference`.
+    #[arg(long, value_name = "DIR")]
+    pub reference: PathBuf,
+    /// The method measured.
+    #[arg(long, default_value = "path", value_name = "METHOD")]
+    pub method: String,
+    /// The frame-by-frame baseline it must beat (default: none, only the method).
+    #[arg(long, value_name = "METHOD")]
+    pub baseline: Option<String>,
+    /// Target HDR-FLIP errors, comma-separated (e.g. 0.12,0.09,0.07).
+    #[arg(long, value_name = "F[,F...]", value_delimiter = ',', required = true)]
+    pub target_flip: Vec<f64>,
+    /// Which frames must reach the target: `mean` (the mean over frames) or `max` (every frame).
+    #[arg(long, default_value = "mean", value_parser = ["mean", "max"])]
+    pub criterion: String,
+    /// First effort level (spp) tried; it doubles from there.
+    #[arg(long, default_value_t = 1, value_name = "N")]
+    pub start_effort: u32,
+    /// Largest effort level tried; a target not met by then is reported as not reached.
+    #[arg(long, default_value_t = 4096, value_name = "N")]
+    pub max_effort: u32,
+    /// Image size; must match the references. Default: the references' size.
+    #[arg(long, value_name = "WxH")]
+    pub resolution: Option<String>,
+    /// Longest path in segments (Mitsuba's max_depth). Default: unlimited.
+    #[arg(long, value_name = "N")]
+    pub max_depth: Option<u32>,
+    #[arg(long, default_value_t = 24.0, value_name = "FPS")]
+    pub fps: f32,
+    #[arg(long, default_value_t = 0, value_name = "S")]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+    /// Write a Markdown report (tables of every effort level) to this file.
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Print the result as one JSON object.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One complete render of the sequence at one effort.
+#[derive(Clone, Debug, Serialize)]
+pub struct Level {
+    pub effort: u32,
+    pub wall_s: f64,
+    pub cpu_s: f64,
+    pub flip_mean: f64,
+    pub flip_max: f64,
+    pub relmse_mean: f64,
+    /// Mean over consecutive frame pairs (None for a single frame).
+    pub flicker: Option<f64>,
+}
+
+/// A method's curve and its times to each target.
+#[derive(Clone, Debug, Serialize)]
+pub struct MethodResult {
+    pub method: String,
+    pub levels: Vec<Level>,
+    /// Per target: the first level reaching it (None: not reached up to max effort).
+    pub reached: Vec<Option<Level>>,
+}
+
+/// The whole result; the flat fields are for the first target.
+#[derive(Debug, Serialize)]
+pub struct QualityResult {
+    pub method: String,
+    pub baseline: Option<String>,
+    pub criterion: String,
+    pub frames: Vec<u32>,
+    pub target_flip: f64,
+    pub method_time_s: Option<f64>,
+    pub baseline_time_s: Option<f64>,
+    /// baseline time / method time.
+    pub speedup: Option<f64>,
+    pub method_flicker: Option<f64>,
+    pub baseline_flicker: Option<f64>,
+    pub targets: Vec<f64>,
+    pub results: Vec<MethodResult>,
+}
+
+/// Process CPU seconds (user + system) from /proc/self/stat (Linux; USER_HZ = 100, the
+/// value every Linux ABI fixes for this interface). `None` elsewhere.
+fn cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let (u, k): (f64, f64) = (f.get(11)?.parse().ok()?, f.get(12)?.parse().ok()?);
+    Some((u + k) / 100.0)
+}
+
+/// The technique of `method` at `effort`.
+pub fn config_for(
+    method: &str,
+    effort: u32,
+    max_depth: Option<u32>,
+    seed: u64,
+) -> Result<TechniqueConfig> {
+    Ok(match method {
+        "path" => TechniqueConfig::Path(PathSettings {
+            spp: effort,
+            max_depth,
+            rr_depth: 5,
+            seed,
+        }),
+        m => bail!(
+            "bench quality does not know how to scale the effort of method '{m}' (known: path)"
+        ),
+    })
+}
+
+fn meets(level: &Level, target: f64, criterion: &str) -> bool {
+    let v = if criterion == "max" {
+        level.flip_max
+    } else {
+        level.flip_mean
+    };
+    v <= target
+}
+
+pub fn run(args: QualityArgs) -> Result<()> {
+    if args.start_effort == 0 || args.max_effort < args.start_effort {
+        bail!("--start-effort must be ≥ 1 and ≤ --max-effort");
+    }
+    if args.target_flip.iter().any(|t| !(*t > 0.0 && *t < 1.0)) {
+        bail!("--target-flip values must lie in (0, 1)");
+    }
+    if let Some(t) = args.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t.max(1))
+            .build_global()
+            .context("cannot set up the thread pool")?;
+    }
+    let frames = parse_frames(&args.frames)?;
+    let mut refs = Vec::new();
+    for &f in &frames {
+        let p = args
+            .reference
+            .join(format!("{}.exr", chronolux_io::output::frame_stem(f)));
+        let img = read_exr(&p).with_context(|| {
+            format!("reference frame {f} missing or unreadable (make references with `chronolux reference ... --output {}`)", args.reference.display())
+        })?;
+        refs.push(img);
+    }
+    let (w, h) = match &args.resolution {
+        Some(r) => parse_resolution(r)?,
+        None => (refs[0].width, refs[0].height),
+    };
+    if refs.iter().any(|r| r.width != w || r.height != h) {
+        bail!(
+            "references are not all {w}x{h} (the size rendered); pass --resolution to match them"
+        );
+    }
+    let mut targets = args.target_flip.clone();
+    targets.sort_by(|a, b| b.partial_cmp(a).unwrap());
+    let input = scene_input::load(&args.scene)?;
+    let desc = Arc::new(input.desc);
+    let mut methods = vec![args.method.clone()];
+    methods.extend(args.baseline.clone());
+    for m in &methods {
+        config_for(m, 1, None, 0)?;
+    }
+    let hdr = flip::HdrSettings::default();
+
+    let mut results = Vec::new();
+    for m in &methods {
+        let mut levels: Vec<Level> = Vec::new();
+        let mut reached: Vec<Option<Level>> = vec![None; targets.len()];
+        let mut effort = args.start_effort;
+        loop {
+            let mut renderer = config_for(m, effort, args.max_depth, args.seed)?.build();
+            let mut builder =
+                FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+            let (t0, c0) = (Instant::now(), cpu_seconds());
+            let mut images = Vec::new();
+            for &f in &frames {
+                let scene = builder.build(f as f32 / args.fps);
+                images.push(renderer.render_frame(&scene, f, &|_| {}).pixels);
+            }
+            let wall_s = t0.elapsed().as_secs_f64();
+            let cpu_s = match (c0, cpu_seconds()) {
+                (Some(a), Some(b)) => b - a,
+                _ => f64::NAN,
+            };
+            let flips: Vec<f64> = images
+                .iter()
+                .zip(&refs)
+                .map(|(i, r)| flip::flip_hdr(&r.pixels, i, w as usize, h as usize, &hdr).mean())
+                .collect();
+            let relmse: Vec<f64> = images
+                .iter()
+                .zip(&refs)
+                .map(|(i, r)| metrics::rel_mse(i, &r.pixels))
+                .collect();
+            let flicker = (images.len() > 1).then(|| {
+                let v: Vec<f64> = (1..images.len())
+                    .map(|k| {
+                        metrics::flicker(
+                            &images[k - 1],
+                            &images[k],
+                            &refs[k - 1].pixels,
+                            &refs[k].pixels,
+                        )
+                    })
+                    .collect();
+                v.iter().sum::<f64>() / v.len() as f64
+            });
+            let level = Level {
+                effort,
+                wall_s,
+                cpu_s,
+                flip_mean: flips.iter().sum::<f64>() / flips.len() as f64,
+                flip_max: flips.iter().copied().fold(0.0, f64::max),
+                relmse_mean: relmse.iter().sum::<f64>() / relmse.len() as f64,
+                flicker,
+            };
+            eprintln!(
+                "{m} effort {effort}: {:.2} s wall, {:.2} s CPU, FLIP mean {:.4} max {:.4}, flicker {}",
+                level.wall_s,
+                level.cpu_s,
+                level.flip_mean,
+                level.flip_max,
+                level.flicker.map_or("-".into(), |f| format!("{f:.4}"))
+            );
+            for (k, t) in targets.iter().enumerate() {
+                if reached[k].is_none() && meets(&level, *t, &args.criterion) {
+                    reached[k] = Some(level.clone());
+                }
+            }
+            levels.push(level);
+            if reached.iter().all(Option::is_some) || effort >= args.max_effort {
+                break;
+            }
+            effort = (effort * 2).min(args.max_effort);
+        }
+        results.push(MethodResult {
+            method: m.clone(),
+            levels,
+            reached,
+        });
+    }
+
+    // The flat fields speak of the first target as given on the command line.
+    let first = args.target_flip[0];
+    let k0 = targets.iter().position(|t| *t == first).unwrap();
+    let time = |r: &MethodResult, k: usize| r.reached[k].as_ref().map(|l| l.wall_s);
+    let flick = |r: &MethodResult, k: usize| r.reached[k].as_ref().and_then(|l| l.flicker);
+    let method_time_s = time(&results[0], k0);
+    let baseline_time_s = results.get(1).and_then(|r| time(r, k0));
+    let result = QualityResult {
+        method: args.method.clone(),
+        baseline: args.baseline.clone(),
+        criterion: args.criterion.clone(),
+        frames: frames.clone(),
+        target_flip: first,
+        method_time_s,
+        baseline_time_s,
+        speedup: match (method_time_s, baseline_time_s) {
+            (Some(a), Some(b)) if a > 0.0 => Some(b / a),
+            _ => None,
+        },
+        method_flicker: flick(&results[0], k0),
+        baseline_flicker: results.get(1).and_then(|r| flick(r, k0)),
+        targets: targets.clone(),
+        results,
+    };
+    let md = markdown(&result);
+    if let Some(p) = &args.report {
+        chronolux_io::output::write_atomic(p, |w| std::io::Write::write_all(w, md.as_bytes()))
+            .with_context(|| format!("writing report {}", p.display()))?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string(&result)?);
+    } else {
+        print!("{md}");
+    }
+    Ok(())
+}
+
+fn opt(v: Option<f64>, digits: usize) -> String {
+    v.map_or("not reached".into(), |x| format!("{x:.digits$}"))
+}
+
+/// The report: times to each target side by side, then every level of every method.
+pub fn markdown(r: &QualityResult) -> String {
+    let mut s = String::new();
+    s += &format!(
+        "# Equal-quality benchmark: {}{}\n\nFrames {:?}, criterion: {} HDR-FLIP over frames.\n\n",
+        r.method,
+        r.baseline
+            .as_ref()
+            .map_or(String::new(), |b| format!(" vs {b}")),
+        r.frames,
+        r.criterion
+    );
+    s += "| target FLIP |";
+    for m in &r.results {
+        s += &format!(
+            " {} time (s) | {} effort | {} flicker |",
+            m.method, m.method, m.method
+        );
+    }
+    if r.results.len() == 2 {
+        s += " speed-up |";
+    }
+    s += "\n|---|";
+    for _ in &r.results {
+        s += "---|---|---|";
+    }
+    if r.results.len() == 2 {
+        s += "---|";
+    }
+    s += "\n";
+    for (k, t) in r.targets.iter().enumerate() {
+        s += &format!("| {t} |");
+        for m in &r.results {
+            let l = m.reached[k].as_ref();
+            s += &format!(
+                " {} | {} | {} |",
+                opt(l.map(|l| l.wall_s), 2),
+                l.map_or("-".into(), |l| l.effort.to_string()),
+                opt(l.and_then(|l| l.flicker), 4)
+            );
+        }
+        if r.results.len() == 2 {
+            let (a, b) = (
+                r.results[0].reached[k].as_ref(),
+                r.results[1].reached[k].as_ref(),
+            );
+            s += &format!(
+                " {} |",
+                match (a, b) {
+                    (Some(a), Some(b)) if a.wall_s > 0.0 => format!("{:.2}×", b.wall_s / a.wall_s),
+                    _ => "-".into(),
+                }
+            );
+        }
+        s += "\n";
+    }
+    for m in &r.results {
+        s += &format!(
+            "\n## {}: every effort level\n\n| effort | wall (s) | CPU (s) | FLIP mean | FLIP max | relMSE | flicker |\n|---|---|---|---|---|---|---|\n",
+            m.method
+        );
+        for l in &m.levels {
+            s += &format!(
+                "| {} | {:.2} | {:.2} | {:.4} | {:.4} | {:.5} | {} |\n",
+                l.effort,
+                l.wall_s,
+                l.cpu_s,
+                l.flip_mean,
+                l.flip_max,
+                l.relmse_mean,
+                opt(l.flicker, 4)
+            );
+        }
+    }
+    s
+}

@@ -21,6 +21,10 @@ pub struct PixelSampler {
     index: u32,
     dim: u32,
     rng: Pcg32,
+    /// Sobol values of the 4-dimension set `cached_set` for the current sample: the
+    /// sequence is evaluated four dimensions at a time (one SIMD call instead of four).
+    cache: [f32; 4],
+    cached_set: u32,
 }
 
 impl PixelSampler {
@@ -32,6 +36,8 @@ impl PixelSampler {
             index: 0,
             dim: 0,
             rng: Pcg32::new(key, 0),
+            cache: [0.0; 4],
+            cached_set: u32::MAX,
         }
     }
 
@@ -39,6 +45,7 @@ impl PixelSampler {
     pub fn start_sample(&mut self, index: u32) {
         self.index = index;
         self.dim = 0;
+        self.cached_set = u32::MAX;
         self.rng = Pcg32::new(
             super::mix64(self.seed as u64 ^ ((index as u64) << 32)),
             self.seed as u64,
@@ -50,7 +57,12 @@ impl PixelSampler {
         let d = self.dim;
         self.dim += 1;
         if d < SOBOL_DIMS && self.index < SOBOL_MAX_SAMPLES {
-            sobol_burley::sample(self.index, d, self.seed).min(ONE_MINUS_EPSILON)
+            let set = d / 4;
+            if set != self.cached_set {
+                self.cache = sobol_burley::sample_4d(self.index, set, self.seed);
+                self.cached_set = set;
+            }
+            self.cache[(d % 4) as usize].min(ONE_MINUS_EPSILON)
         } else {
             self.rng.next_f32()
         }

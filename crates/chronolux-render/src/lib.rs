@@ -11,6 +11,7 @@
 //!   heuristic), Russian roulette and Owen-scrambled Sobol samples per pixel — the
 //!   reference every other method is measured against.
 
+pub mod bdpt;
 pub mod integrator;
 pub mod pt;
 pub mod registry;

@@ -110,3 +110,112 @@ pub fn render_camera_rays<E: RadianceEstimator>(
         invalid_samples: invalid,
     }
 }
+
+/// An estimator whose samples, besides the radiance of their own camera sample, contribute
+/// to arbitrary pixels (light tracing, the t = 1 strategies of bidirectional methods).
+pub trait SplattingEstimator: Sync {
+    /// Estimate for the camera sample at `raster` (already jittered inside its pixel),
+    /// drawing every number from `sampler`. Contributions to the pixel a raster position
+    /// falls in are pushed to `splats` as (raster, value), with values normalised so that a
+    /// pixel's estimate is the sum of the splats it receives from **all** pixels' samples
+    /// of one sample index (see [`render_with_splats`]).
+    fn sample(
+        &self,
+        scene: &FrameScene,
+        raster: Vec2,
+        sampler: &mut PixelSampler,
+        stats: &mut Stats,
+        splats: &mut Vec<(Vec2, Rgb)>,
+    ) -> Rgb;
+}
+
+/// The splatting driver: like [`render_camera_rays`], plus contributions splatted to other
+/// pixels. Samples are taken in passes, one sample index per pass over the whole image;
+/// within a pass tiles run in parallel and their splats are merged in tile order, so the
+/// image is bit-identical for any thread count. Pixel `k`'s value for pass `s` is its own
+/// camera estimate plus every splat of pass `s` that lands in it; the film averages these
+/// per-pass values, so [`RenderedFrame::variance`] is the variance of the mean of `spp`
+/// independent per-pass estimates (splats included).
+pub fn render_with_splats<E: SplattingEstimator>(
+    est: &E,
+    scene: &FrameScene,
+    frame: u32,
+    spp: u32,
+    seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderedFrame {
+    let cam = &scene.camera;
+    let (w, h) = (cam.width, cam.height);
+    let tiles_x = w.div_ceil(TILE);
+    let tiles_y = h.div_ceil(TILE);
+    let n_tiles = (tiles_x * tiles_y) as usize;
+    let mut film = Film::new(w, h);
+    let mut stats = Stats::default();
+    let mut invalid = 0u64;
+    let mut pass = vec![Rgb::ZERO; (w * h) as usize];
+    for s in 0..spp {
+        let results = parallel::map_chunks(n_tiles, 1, |range| {
+            let t = range.start as u32;
+            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
+            let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+            let mut own = Vec::with_capacity((tw * th) as usize);
+            let mut splats = Vec::new();
+            let mut stats = Stats::default();
+            let mut invalid = 0u64;
+            for y in 0..th {
+                for x in 0..tw {
+                    let (px, py) = (x0 + x, y0 + y);
+                    let mut sampler = PixelSampler::new(seed, frame, px, py);
+                    sampler.start_sample(s);
+                    let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
+                    let l = est.sample(scene, raster, &mut sampler, &mut stats, &mut splats);
+                    stats.samples += 1;
+                    own.push(if l.is_finite() {
+                        l
+                    } else {
+                        invalid += 1;
+                        Rgb::ZERO
+                    });
+                }
+            }
+            // Spread this tile's progress over the passes (sums to tw·th per tile).
+            let n = (tw * th) as u64;
+            progress(n * (s as u64 + 1) / spp as u64 - n * s as u64 / spp as u64);
+            (x0, y0, tw, th, own, splats, stats, invalid)
+        });
+        for (x0, y0, tw, th, own, _, st, inv) in &results {
+            for y in 0..*th {
+                for x in 0..*tw {
+                    pass[((y0 + y) * w + x0 + x) as usize] = own[(y * tw + x) as usize];
+                }
+            }
+            stats += *st;
+            invalid += inv;
+        }
+        for (.., splats, _, _) in &results {
+            for (r, v) in splats {
+                if !v.is_finite() {
+                    invalid += 1;
+                    continue;
+                }
+                let (x, y) = (r.x as u32, r.y as u32);
+                if r.x >= 0.0 && r.y >= 0.0 && x < w && y < h {
+                    pass[(y * w + x) as usize] += *v;
+                }
+            }
+        }
+        for y in 0..h {
+            for x in 0..w {
+                film.add(x, y, pass[(y * w + x) as usize], 1.0);
+            }
+        }
+    }
+    RenderedFrame {
+        width: w,
+        height: h,
+        pixels: film.pixels(),
+        variance: film.variance_of_mean(),
+        stats,
+        invalid_samples: invalid,
+    }
+}

@@ -10,7 +10,11 @@
 //! - `path`: unidirectional path tracing with next-event estimation, MIS (power
 //!   heuristic), Russian roulette and Owen-scrambled Sobol samples per pixel — the
 //!   reference every other method is measured against.
+//! - `bdpt`: bidirectional path tracing ([`bdpt`]), every (s, t) strategy including light
+//!   tracing splatted through [`integrator::render_with_splats`], MIS by the ratio trick —
+//!   the frame-by-frame baseline of the spatio-temporal technique.
 
+pub mod bdpt;
 pub mod integrator;
 pub mod pt;
 pub mod registry;

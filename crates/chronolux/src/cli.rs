@@ -81,8 +81,9 @@ pub struct RenderArgs {
     /// emitters only, 2 adds direct lighting. Default: unlimited (Russian roulette ends paths).
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
-    /// Light-transport method. `path`: unidirectional path tracing (the reference).
-    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path"])]
+    /// Light-transport method. `path`: unidirectional path tracing (the reference);
+    /// `bdpt`: bidirectional path tracing, frame by frame.
+    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt"])]
     pub method: String,
     /// Seed of every random sequence; the same seed gives bit-identical images.
     #[arg(long, default_value_t = 0, value_name = "S")]

@@ -147,6 +147,12 @@ pub fn run(args: RenderArgs) -> Result<()> {
             rr_depth: 5,
             seed: args.seed,
         }),
+        "bdpt" => TechniqueConfig::Bdpt(chronolux_render::bdpt::BdptSettings {
+            spp: args.spp,
+            max_depth: args.max_depth,
+            seed: args.seed,
+            ..Default::default()
+        }),
         m => bail!("unknown --method '{m}'"),
     };
     let mut renderer = config.build();

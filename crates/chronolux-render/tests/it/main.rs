@@ -1,6 +1,7 @@
 //! The one integration-test binary of chronolux-render: integrators on scenes with
 //! derivable answers.
 
+mod bdpt;
 mod determinism;
 mod furnace;
 mod peer;

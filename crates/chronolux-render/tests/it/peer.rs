@@ -98,7 +98,7 @@ fn path_tracer_converges_to_the_mitsuba_reference() {
 
 #[allow(clippy::excessive_precision)] // reason: the published coefficients, kept as printed
 /// Inverse of the standard normal cdf (Acklam's rational approximation, |error| < 1.2e-9).
-fn normal_quantile(p: f64) -> f64 {
+pub(crate) fn normal_quantile(p: f64) -> f64 {
     const A: [f64; 6] = [
         -3.969683028665376e1,
         2.209460984245205e2,

@@ -1,0 +1,228 @@
+//! Connection strategies (s, t) and their multiple-importance weights (Veach 1997 §10.2,
+//! pbrt-v4 `ConnectBDPT` / `MISWeight`).
+
+use super::vertex::{Vertex, VertexKind, g, light_emission_bary};
+use super::{BdptSettings, MisHeuristic};
+use chronolux_core::bsdf::TransportMode;
+use chronolux_core::color::Rgb;
+use chronolux_core::geometry::spawn_ray_to;
+use chronolux_core::math::Vec2;
+use chronolux_core::sampling::sampler::PixelSampler;
+use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::stats::Stats;
+
+/// The MIS-weighted contribution of one strategy.
+#[derive(Clone, Copy, Debug)]
+pub struct Contribution {
+    /// Weighted contribution to the pixel measurement.
+    pub l: Rgb,
+    /// For t = 1 (light tracing): the raster position to splat `l` to, with the image
+    /// normalisation of [`chronolux_core::camera::Camera::we`] (divide the sum of splats by
+    /// the light subpaths per pixel). `None`: `l` belongs to the camera sample's own pixel.
+    pub raster: Option<Vec2>,
+}
+
+/// Connects the first `s` vertices of `light` with the first `t` of `camera` (t ≥ 1) and
+/// returns the MIS-weighted contribution, `None` when it is zero.
+///
+/// ## Estimator contract
+/// - `camera` comes from [`super::generate_camera_subpath`] and `light` from
+///   [`super::generate_light_subpath`] on the same `scene`, with the same `settings`.
+/// - s = 0: the camera subpath's vertex t−1 is an emitter (or the escaped ray's point at
+///   infinity); s = 1: a fresh light sample at camera vertex t−1 (draws 3 numbers from
+///   `sampler`, always, so the stream stays aligned); t = 1: light vertex s−1 is connected
+///   to the pinhole and splatted (see [`Contribution::raster`]); otherwise a deterministic
+///   connection with visibility. (s, t) = (1, 1) and t = 0 are not strategies here.
+/// - The sum over all (s, t) with s + t − 1 ≤ max_depth (segments) is an unbiased
+///   estimate of the pixel measurement (MIS weights sum to 1 over the strategies able to
+///   produce a path; Russian roulette only rescales subpath throughputs).
+#[allow(clippy::too_many_arguments)] // reason: the two subpaths, the strategy and the streams
+pub fn connect(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    sampler: &mut PixelSampler,
+    stats: &mut Stats,
+) -> Option<Contribution> {
+    if t == 0 || t > camera.len() || s > light.len() {
+        return None;
+    }
+    // A camera subpath ending at infinity only serves s = 0.
+    if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::Light {
+        return None;
+    }
+    let mut sampled: Option<Vertex> = None;
+    let mut raster = None;
+    let l = if s == 0 {
+        let pt = &camera[t - 1];
+        if t < 2 || !pt.is_light(scene) {
+            return None;
+        }
+        pt.le(scene, &camera[t - 2]) * pt.beta
+    } else if t == 1 {
+        let qs = &light[s - 1];
+        if !qs.is_connectible(scene) {
+            return None;
+        }
+        let cs = scene.camera.sample_wi(qs.p)?;
+        let v = Vertex::camera(cs.p, Rgb::splat(cs.we / cs.pdf), false);
+        let mut l = qs.beta * qs.f(&v, TransportMode::Importance) * v.beta;
+        if qs.is_on_surface() {
+            l *= cs.wi.dot(qs.ns).abs();
+        }
+        if l == Rgb::ZERO {
+            return None;
+        }
+        stats.shadow_rays += 1;
+        if scene.occluded(&spawn_ray_to(qs.p, qs.ng, cs.p, v.ng)) {
+            return None;
+        }
+        raster = Some(cs.raster);
+        sampled = Some(v);
+        l
+    } else if s == 1 {
+        let u_light = sampler.next_1d();
+        let u_lp = sampler.next_2d();
+        let pt = &camera[t - 1];
+        if !pt.is_connectible(scene) {
+            return None;
+        }
+        let (li, pmf, _) = scene.light_sampler.sample(u_light)?;
+        let light_ref = &scene.lights[li];
+        let ls = light_ref.sample_li(pt.p, u_lp, scene.scene_radius)?;
+        if ls.pdf <= 0.0 || pmf <= 0.0 {
+            return None;
+        }
+        let le = light_emission_bary(scene, light_ref, ls.li, ls.bary);
+        let mut v = Vertex::light(scene, Some(li), ls.p, ls.n, le / (ls.pdf * pmf), 0.0);
+        v.pdf_fwd = v.pdf_light_origin(scene, pt);
+        let mut l = pt.beta * pt.f(&v, TransportMode::Radiance) * v.beta;
+        if pt.is_on_surface() {
+            l *= ls.wi.dot(pt.ns).abs();
+        }
+        if l == Rgb::ZERO {
+            return None;
+        }
+        stats.shadow_rays += 1;
+        if scene.occluded(&spawn_ray_to(pt.p, pt.ng, ls.p, ls.n)) {
+            return None;
+        }
+        sampled = Some(v);
+        l
+    } else {
+        let (qs, pt) = (&light[s - 1], &camera[t - 1]);
+        if !qs.is_connectible(scene) || !pt.is_connectible(scene) {
+            return None;
+        }
+        let l = qs.beta
+            * qs.f(pt, TransportMode::Importance)
+            * pt.f(qs, TransportMode::Radiance)
+            * pt.beta;
+        if l == Rgb::ZERO {
+            return None;
+        }
+        let gt = g(scene, qs, pt, stats);
+        if gt == 0.0 {
+            return None;
+        }
+        l * gt
+    };
+    if l == Rgb::ZERO {
+        return None;
+    }
+    let w = mis_weight(scene, settings, light, camera, sampled.as_ref(), s, t);
+    Some(Contribution { l: l * w, raster })
+}
+
+/// MIS weight of strategy (s, t) for the path it built, by the ratio trick over reversed
+/// densities (pbrt-v4 `MISWeight`): `1 / Σ_i (p_i/p_s)^β`, β = 1 (balance) or 2 (power),
+/// skipping strategies that would connect through a delta vertex or start at a delta light.
+/// `sampled` replaces light vertex 0 (s = 1) or camera vertex 0 (t = 1).
+pub fn mis_weight(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    light: &[Vertex],
+    camera: &[Vertex],
+    sampled: Option<&Vertex>,
+    s: usize,
+    t: usize,
+) -> f32 {
+    if s + t == 2 {
+        return 1.0;
+    }
+    let lv = |i: usize| -> &Vertex {
+        match sampled {
+            Some(v) if s == 1 && i == 0 => v,
+            _ => &light[i],
+        }
+    };
+    let cv = |i: usize| -> &Vertex {
+        match sampled {
+            Some(v) if t == 1 && i == 0 => v,
+            _ => &camera[i],
+        }
+    };
+    let h = |r: f32| match settings.mis {
+        MisHeuristic::Balance => r,
+        MisHeuristic::Power => r * r,
+    };
+    let remap = |f: f32| if f != 0.0 { f } else { 1.0 };
+    let pt = cv(t - 1);
+    let qs = (s > 0).then(|| lv(s - 1));
+    let pt_minus = (t > 1).then(|| cv(t - 2));
+    let qs_minus = (s > 1).then(|| lv(s - 2));
+    // Reverse densities of the four vertices next to the connection.
+    let pt_rev = match qs {
+        Some(q) => q.pdf(scene, qs_minus, pt),
+        None => pt.pdf_light_origin(scene, pt_minus.expect("s = 0 needs t ≥ 2")),
+    };
+    let pt_minus_rev = pt_minus.map(|pm| match qs {
+        Some(q) => pt.pdf(scene, Some(q), pm),
+        None => pt.pdf_light(scene, pm),
+    });
+    let qs_rev = qs.map(|q| pt.pdf(scene, pt_minus, q));
+    let qs_minus_rev = qs_minus.map(|qm| qs.unwrap().pdf(scene, Some(pt), qm));
+
+    let mut sum = 0.0f32;
+    let mut ri = 1.0f32;
+    for i in (1..t).rev() {
+        let v = cv(i);
+        let rev = if i == t - 1 {
+            pt_rev
+        } else if i + 2 == t {
+            pt_minus_rev.unwrap()
+        } else {
+            v.pdf_rev
+        };
+        ri *= remap(rev) / remap(v.pdf_fwd);
+        let delta_i = i != t - 1 && v.delta;
+        if !delta_i && !cv(i - 1).delta {
+            sum += h(ri);
+        }
+    }
+    ri = 1.0;
+    for i in (0..s).rev() {
+        let v = lv(i);
+        let rev = if i == s - 1 {
+            qs_rev.unwrap()
+        } else if i + 2 == s {
+            qs_minus_rev.unwrap()
+        } else {
+            v.pdf_rev
+        };
+        ri *= remap(rev) / remap(v.pdf_fwd);
+        let delta_i = i != s - 1 && v.delta;
+        let delta_light = if i > 0 {
+            lv(i - 1).delta
+        } else {
+            lv(0).is_delta_light(scene)
+        };
+        if !delta_i && !delta_light {
+            sum += h(ri);
+        }
+    }
+    1.0 / (1.0 + sum)
+}

@@ -1,0 +1,368 @@
+//! Bidirectional path tracing (Veach 1997, ch. 10; pbrt-v4's `BDPTIntegrator` as the
+//! model): a camera subpath and a light subpath per pixel sample, every connection
+//! strategy (s, t) — s = 0 (the camera path hits an emitter), s = 1 (light sampling at a
+//! camera vertex), t = 1 (light tracing, splatted to the pixel the light vertex projects
+//! to), and deterministic connections — weighted by multiple importance sampling (balance
+//! or power heuristic) computed with the ratio trick over reversed densities.
+//!
+//! Delta lights (point, spot, directional), delta BSDF lobes (mirror, smooth glass) and
+//! area lights are handled as in pbrt-v4: connections to delta vertices are skipped and
+//! the MIS weights exclude the strategies that cannot produce a path.
+//!
+//! The kernel is three public functions the spatio-temporal technique reuses:
+//! [`generate_camera_subpath`], [`generate_light_subpath`] and [`connect::connect`].
+//! [`Bdpt`] composes them per pixel sample; [`crate::integrator::render_with_splats`]
+//! drives the samples.
+//!
+//! Sample streams: every number of a sample of pixel p — camera raster, camera subpath,
+//! light subpath, connections — comes from that pixel's [`PixelSampler`], in that order.
+
+pub mod connect;
+pub mod vertex;
+
+use crate::integrator::{Integrator, RenderedFrame, SplattingEstimator, render_with_splats};
+use chronolux_core::bsdf::TransportMode;
+use chronolux_core::color::{Rgb, max_component};
+use chronolux_core::geometry::{Ray, spawn_ray};
+use chronolux_core::material;
+use chronolux_core::math::Vec2;
+use chronolux_core::sampling::sampler::PixelSampler;
+use chronolux_core::scene::desc::Projection;
+use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::stats::Stats;
+pub use connect::{Contribution, connect, mis_weight};
+pub use vertex::{Vertex, VertexKind};
+
+/// MIS heuristic over the strategies of a path length.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum MisHeuristic {
+    Balance,
+    /// β = 2 (Veach's recommendation). Default.
+    #[default]
+    Power,
+}
+
+/// Bidirectional path tracer settings.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BdptSettings {
+    /// Samples per pixel (each one camera and one light subpath). Default 64.
+    pub spp: u32,
+    /// Longest path in segments from the camera (Mitsuba's `max_depth`, as for
+    /// [`crate::pt::PathSettings`]): strategy (s, t) builds s + t − 1 segments. `None` =
+    /// unlimited (Russian roulette ends subpaths). Default `None`.
+    pub max_depth: Option<u32>,
+    /// Subpath depth (segments from its endpoint) from which Russian roulette may end a
+    /// subpath. Default 5.
+    pub rr_depth: u32,
+    /// Seed of all sample streams. Default 0.
+    pub seed: u64,
+    /// MIS heuristic. Default power.
+    #[serde(default)]
+    pub mis: MisHeuristic,
+}
+
+impl Default for BdptSettings {
+    fn default() -> Self {
+        BdptSettings {
+            spp: 64,
+            max_depth: None,
+            rr_depth: 5,
+            seed: 0,
+            mis: MisHeuristic::Power,
+        }
+    }
+}
+
+/// Hard cap on path length when `max_depth` is unlimited (as the path tracer's).
+const DEPTH_CAP: u32 = 1024;
+
+impl BdptSettings {
+    /// Maximum path length in segments.
+    pub fn depth(&self) -> u32 {
+        self.max_depth.unwrap_or(DEPTH_CAP).min(DEPTH_CAP)
+    }
+}
+
+/// Extends `path` (whose last vertex emitted `ray` with solid-angle density `pdf`) by
+/// BSDF sampling, adding at most `max_vertices` vertices. Returns nothing; `path` grows.
+#[allow(clippy::too_many_arguments)] // reason: the walk's full state, as pbrt's RandomWalk
+fn random_walk(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    mut ray: Ray,
+    mut beta: Rgb,
+    pdf: f32,
+    max_vertices: u32,
+    mode: TransportMode,
+    sampler: &mut PixelSampler,
+    path: &mut Vec<Vertex>,
+    stats: &mut Stats,
+) {
+    if max_vertices == 0 {
+        return;
+    }
+    let mut pdf_fwd = pdf;
+    let mut added = 0u32;
+    // Product of BSDF weights (Russian roulette), and of η² undoing radiance scaling.
+    let mut throughput = Rgb::ONE;
+    let mut eta_scale = 1.0f32;
+    loop {
+        stats.rays += 1;
+        let prev = path.last().expect("a walk starts at an endpoint");
+        let Some(hit) = scene.intersect(&ray) else {
+            if mode == TransportMode::Radiance && scene.environment.is_some() {
+                let mut v = Vertex::light(
+                    scene,
+                    scene.environment_light,
+                    ray.o + ray.d,
+                    chronolux_core::math::Vec3::ZERO,
+                    beta,
+                    0.0,
+                );
+                v.infinite = true;
+                v.pdf_fwd = pdf_fwd;
+                path.push(v);
+            }
+            return;
+        };
+        let si = scene.interaction(&hit, &ray);
+        let wo = -ray.d.normalize();
+        let bsdf = material::bsdf_at(
+            &scene.materials[si.material as usize],
+            &scene.textures,
+            &si.shading,
+        );
+        let mut v = Vertex::surface(si, bsdf, wo, beta);
+        v.pdf_fwd = prev.convert_density(pdf_fwd, &v);
+        path.push(v);
+        added += 1;
+        if added >= max_vertices {
+            return;
+        }
+        let u_lobe = sampler.next_1d();
+        let u_dir = sampler.next_2d();
+        let v = path.last().unwrap();
+        let sv = v.surface.as_ref().unwrap();
+        let Some(bs) = sv.bsdf.sample(wo, u_lobe, u_dir, mode) else {
+            return;
+        };
+        if bs.weight == Rgb::ZERO {
+            return;
+        }
+        beta *= bs.weight;
+        throughput *= bs.weight;
+        pdf_fwd = bs.pdf;
+        let mut pdf_rev = sv.bsdf.pdf(bs.wi, wo);
+        if mode == TransportMode::Radiance && bs.is_transmission {
+            eta_scale *= bs.eta * bs.eta;
+        }
+        let (p, ng) = (sv.si.p, sv.si.ng);
+        let n = path.len();
+        if bs.is_delta {
+            path[n - 1].delta = true;
+            pdf_fwd = 0.0;
+            pdf_rev = 0.0;
+        }
+        let rev = path[n - 1].convert_density(pdf_rev, &path[n - 2]);
+        path[n - 2].pdf_rev = rev;
+        ray = spawn_ray(p, ng, bs.wi);
+        // The next segment is segment number n of this subpath.
+        if n as u32 > settings.rr_depth {
+            let q = (max_component(throughput) * eta_scale).min(0.95);
+            if sampler.next_1d() >= q {
+                return;
+            }
+            beta /= q;
+            throughput /= q;
+        }
+    }
+}
+
+/// Generates the camera subpath of the camera sample at `raster` into `path` (cleared):
+/// the camera vertex, then up to `max_depth` surface vertices (or a final vertex at
+/// infinity when the ray escapes into an environment).
+///
+/// ## Estimator contract
+/// Vertex 0 is the camera with β = 1 (the pixel measurement's We/pdf for a raster position
+/// uniform in the pixel); vertex i's β is the product of BSDF sample weights
+/// f·|cos|/pdf (radiance mode) and Russian-roulette factors along the way, so
+/// `β_i · (incident radiance at vertex i towards i−1)` estimates the pixel value. Each
+/// vertex carries area densities `pdf_fwd`/`pdf_rev` for [`connect::mis_weight`].
+/// Draws 3 numbers per bounce (+1 for Russian roulette past `rr_depth`).
+pub fn generate_camera_subpath(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    raster: Vec2,
+    sampler: &mut PixelSampler,
+    path: &mut Vec<Vertex>,
+    stats: &mut Stats,
+) {
+    path.clear();
+    let max_depth = settings.depth();
+    if max_depth == 0 {
+        return;
+    }
+    let cam = &scene.camera;
+    let ray = cam.generate_ray(raster);
+    let ortho = matches!(cam.projection, Projection::Orthographic { .. });
+    let (_, pdf_dir) = cam.pdf_we(ray.d);
+    path.push(Vertex::camera(ray.o, Rgb::ONE, ortho));
+    random_walk(
+        scene,
+        settings,
+        ray,
+        Rgb::ONE,
+        pdf_dir,
+        max_depth,
+        TransportMode::Radiance,
+        sampler,
+        path,
+        stats,
+    );
+}
+
+/// Generates a light subpath into `path` (cleared): a light chosen in proportion to power,
+/// a ray from [`Light::sample_le`], then up to `max_depth − 1` surface vertices traced in
+/// importance mode (the BSDF applies the adjoint shading-normal correction).
+///
+/// ## Estimator contract
+/// Vertex 0 is on the light with β = Le (textured) and `pdf_fwd = pmf · pdf_pos` (pbrt's
+/// convention for lights at infinity: see [`vertex`]); vertex i ≥ 1 has
+/// β = Le·|cos|/(pmf·pdf_pos·pdf_dir) times BSDF weights and Russian-roulette factors, so
+/// β_i is the flux-like weight of a particle arriving at vertex i. Always draws 5 numbers
+/// (light choice, position, direction), then 3 per bounce (+1 past `rr_depth`).
+pub fn generate_light_subpath(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    sampler: &mut PixelSampler,
+    path: &mut Vec<Vertex>,
+    stats: &mut Stats,
+) {
+    path.clear();
+    let u_light = sampler.next_1d();
+    let u_pos = sampler.next_2d();
+    let u_dir = sampler.next_2d();
+    let max_depth = settings.depth();
+    if max_depth == 0 {
+        return;
+    }
+    let Some((li, pmf, _)) = scene.light_sampler.sample(u_light) else {
+        return;
+    };
+    if pmf <= 0.0 {
+        return;
+    }
+    let light = &scene.lights[li];
+    let (center, radius) = scene.bounds.bounding_sphere();
+    let Some(les) = light.sample_le(u_pos, u_dir, center, radius) else {
+        return;
+    };
+    if les.pdf_pos <= 0.0 || les.pdf_dir <= 0.0 {
+        return;
+    }
+    let le = vertex::light_emission(scene, light, les.le, les.ray.o);
+    if le == Rgb::ZERO {
+        return;
+    }
+    let v0 = Vertex::light(scene, Some(li), les.ray.o, les.n, le, les.pdf_pos * pmf);
+    let infinite = v0.infinite;
+    path.push(v0);
+    let cos = if les.n == chronolux_core::math::Vec3::ZERO {
+        1.0
+    } else {
+        les.n.dot(les.ray.d).abs()
+    };
+    let beta = le * (cos / (pmf * les.pdf_pos * les.pdf_dir));
+    random_walk(
+        scene,
+        settings,
+        les.ray,
+        beta,
+        les.pdf_dir,
+        max_depth - 1,
+        TransportMode::Importance,
+        sampler,
+        path,
+        stats,
+    );
+    if infinite {
+        if path.len() > 1 {
+            let mut p = les.pdf_pos;
+            if path[1].is_on_surface() {
+                p *= path[1].ng.dot(les.ray.d).abs();
+            }
+            path[1].pdf_fwd = p;
+        }
+        path[0].pdf_fwd = vertex::infinite_light_density(scene);
+    }
+}
+
+/// Bidirectional path tracer.
+#[derive(Clone, Debug, Default)]
+pub struct Bdpt {
+    pub settings: BdptSettings,
+}
+
+impl Bdpt {
+    pub fn new(settings: BdptSettings) -> Self {
+        Bdpt { settings }
+    }
+}
+
+thread_local! {
+    static PATHS: std::cell::RefCell<(Vec<Vertex>, Vec<Vertex>)> =
+        const { std::cell::RefCell::new((Vec::new(), Vec::new())) };
+}
+
+impl SplattingEstimator for Bdpt {
+    fn sample(
+        &self,
+        scene: &FrameScene,
+        raster: Vec2,
+        sampler: &mut PixelSampler,
+        stats: &mut Stats,
+        splats: &mut Vec<(Vec2, Rgb)>,
+    ) -> Rgb {
+        PATHS.with_borrow_mut(|(camera, light)| {
+            let s = &self.settings;
+            generate_camera_subpath(scene, s, raster, sampler, camera, stats);
+            generate_light_subpath(scene, s, sampler, light, stats);
+            let max_segments = s.depth() as usize;
+            let mut l = Rgb::ZERO;
+            for t in 1..=camera.len() {
+                for s_ in 0..=light.len() {
+                    if (s_ == 1 && t == 1) || s_ + t < 2 || s_ + t - 1 > max_segments {
+                        continue;
+                    }
+                    if let Some(c) = connect(scene, s, light, camera, s_, t, sampler, stats) {
+                        match c.raster {
+                            Some(r) => splats.push((r, c.l)),
+                            None => l += c.l,
+                        }
+                    }
+                }
+            }
+            l
+        })
+    }
+}
+
+impl Integrator for Bdpt {
+    fn render(
+        &self,
+        scene: &FrameScene,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        render_with_splats(
+            self,
+            scene,
+            frame,
+            self.settings.spp,
+            self.settings.seed,
+            progress,
+        )
+    }
+}

@@ -10,8 +10,14 @@
 //! - `path`: unidirectional path tracing with next-event estimation, MIS (power
 //!   heuristic), Russian roulette and Owen-scrambled Sobol samples per pixel — the
 //!   reference every other method is measured against.
+//! - `dept`, `dept-spatial`, `dept-bilateral`: photon tracing with density estimation on
+//!   mesh elements, frame by frame, without / with spatial Gaussian / with spatial
+//!   bilateral filtering (Myszkowski et al. 2001; Weber et al. 2004) — [`dept`], photons
+//!   from the one replayable kernel [`kernels::photon`].
 
+pub mod dept;
 pub mod integrator;
+pub mod kernels;
 pub mod pt;
 pub mod registry;
 pub mod sequence;

@@ -1,19 +1,37 @@
 //! The one place where technique names map to types.
 
+use crate::dept::{Dept, DeptSettings};
 use crate::pt::{PathSettings, PathTracer};
 use crate::sequence::{FrameByFrame, SequenceRenderer};
 
 /// Techniques selectable with `--method`.
-pub const METHODS: &[(&str, &str)] = &[(
-    "path",
-    "unidirectional path tracing with NEE and MIS (the reference)",
-)];
+pub const METHODS: &[(&str, &str)] = &[
+    (
+        "path",
+        "unidirectional path tracing with NEE and MIS (the reference)",
+    ),
+    (
+        "dept",
+        "photon density estimation on mesh elements, frame by frame, no filtering",
+    ),
+    (
+        "dept-spatial",
+        "photon density estimation on mesh elements, spatial Gaussian filter",
+    ),
+    (
+        "dept-bilateral",
+        "photon density estimation on mesh elements, spatial bilateral filter",
+    ),
+];
 
 /// A technique and its settings.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(tag = "method", rename_all = "kebab-case", deny_unknown_fields)]
 pub enum TechniqueConfig {
     Path(PathSettings),
+    Dept(DeptSettings),
+    DeptSpatial(DeptSettings),
+    DeptBilateral(DeptSettings),
 }
 
 impl TechniqueConfig {
@@ -22,6 +40,18 @@ impl TechniqueConfig {
             TechniqueConfig::Path(s) => Box::new(FrameByFrame {
                 integrator: PathTracer::new(s.clone()),
                 name: "path",
+            }),
+            TechniqueConfig::Dept(s) => Box::new(FrameByFrame {
+                integrator: Dept::new(s.clone()),
+                name: "dept",
+            }),
+            TechniqueConfig::DeptSpatial(s) => Box::new(FrameByFrame {
+                integrator: Dept::new(s.clone()),
+                name: "dept-spatial",
+            }),
+            TechniqueConfig::DeptBilateral(s) => Box::new(FrameByFrame {
+                integrator: Dept::new(s.clone()),
+                name: "dept-bilateral",
             }),
         }
     }

@@ -145,6 +145,21 @@ pub fn run(args: RenderArgs) -> Result<()> {
             rr_depth: 5,
             seed: args.seed,
         }),
+        "dept" => TechniqueConfig::Dept(chronolux_render::dept::DeptSettings {
+            spp: args.spp,
+            seed: args.seed,
+            ..Default::default()
+        }),
+        "dept-spatial" => TechniqueConfig::DeptSpatial(chronolux_render::dept::DeptSettings {
+            spp: args.spp,
+            seed: args.seed,
+            ..chronolux_render::dept::DeptSettings::spatial()
+        }),
+        "dept-bilateral" => TechniqueConfig::DeptBilateral(chronolux_render::dept::DeptSettings {
+            spp: args.spp,
+            seed: args.seed,
+            ..chronolux_render::dept::DeptSettings::bilateral()
+        }),
         m => bail!("unknown --method '{m}'"),
     };
     let mut renderer = config.build();

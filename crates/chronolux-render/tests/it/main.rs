@@ -1,9 +1,11 @@
 //! The one integration-test binary of chronolux-render: integrators on scenes with
 //! derivable answers.
 
+mod dept;
 mod determinism;
 mod furnace;
 mod peer;
+mod photon;
 
 use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};

@@ -14,6 +14,9 @@
 //!   mesh elements, frame by frame, without / with spatial Gaussian / with spatial
 //!   bilateral filtering (Myszkowski et al. 2001; Weber et al. 2004) — [`dept`], photons
 //!   from the one replayable kernel [`kernels::photon`].
+//! - `spacetime-dept`: the same photons pooled over a per-element temporal window cut by
+//!   an energy test, completed by a spatial bilateral filter (Weber et al. 2004) —
+//!   [`temporal::spacetime_dept`].
 
 pub mod dept;
 pub mod integrator;
@@ -21,3 +24,4 @@ pub mod kernels;
 pub mod pt;
 pub mod registry;
 pub mod sequence;
+pub mod temporal;

@@ -3,6 +3,7 @@
 use crate::dept::{Dept, DeptSettings};
 use crate::pt::{PathSettings, PathTracer};
 use crate::sequence::{FrameByFrame, SequenceRenderer};
+use crate::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
 
 /// Techniques selectable with `--method`.
 pub const METHODS: &[(&str, &str)] = &[
@@ -22,6 +23,10 @@ pub const METHODS: &[(&str, &str)] = &[
         "dept-bilateral",
         "photon density estimation on mesh elements, spatial bilateral filter",
     ),
+    (
+        "spacetime-dept",
+        "photon density estimation on mesh elements, space-time window + bilateral filter",
+    ),
 ];
 
 /// A technique and its settings.
@@ -32,6 +37,7 @@ pub enum TechniqueConfig {
     Dept(DeptSettings),
     DeptSpatial(DeptSettings),
     DeptBilateral(DeptSettings),
+    SpacetimeDept(SpacetimeSettings),
 }
 
 impl TechniqueConfig {
@@ -53,6 +59,7 @@ impl TechniqueConfig {
                 integrator: Dept::new(s.clone()),
                 name: "dept-bilateral",
             }),
+            TechniqueConfig::SpacetimeDept(s) => Box::new(SpacetimeDept::new(s.clone())),
         }
     }
 }

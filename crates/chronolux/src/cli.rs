@@ -81,7 +81,7 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
     /// Light-transport method. `path`: unidirectional path tracing (the reference).
-    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "dept", "dept-spatial", "dept-bilateral"])]
+    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept"])]
     pub method: String,
     /// Seed of every random sequence; the same seed gives bit-identical images.
     #[arg(long, default_value_t = 0, value_name = "S")]

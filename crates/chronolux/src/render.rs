@@ -160,6 +160,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
             seed: args.seed,
             ..chronolux_render::dept::DeptSettings::bilateral()
         }),
+        "spacetime-dept" => TechniqueConfig::SpacetimeDept(
+            chronolux_render::temporal::spacetime_dept::SpacetimeSettings {
+                spp: args.spp,
+                seed: args.seed,
+                ..Default::default()
+            },
+        ),
         m => bail!("unknown --method '{m}'"),
     };
     let mut renderer = config.build();

@@ -118,23 +118,38 @@ impl Dept {
         solved: &DeptFrame,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
-        let view = view::DeptView {
-            mesh: &solved.mesh,
-            indirect: &solved.indirect,
-            caustic: &solved.caustic,
-            max_specular_depth: self.settings.max_specular_depth,
-        };
-        let mut img = render_camera_rays(
-            &view,
+        let mut img = render_view(
+            &self.settings,
             scene,
             frame,
-            self.settings.spp,
-            self.settings.seed,
+            &solved.mesh,
+            &solved.indirect,
+            &solved.caustic,
             progress,
         );
         img.stats.rays += solved.photons.stats.rays;
         img
     }
+}
+
+/// Eye pass over an element solution (camera samples, seed and specular depth from
+/// `settings`).
+pub fn render_view(
+    settings: &DeptSettings,
+    scene: &FrameScene,
+    frame: u32,
+    mesh: &ElementMesh,
+    indirect: &ElementSolution,
+    caustic: &ElementSolution,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderedFrame {
+    let view = view::DeptView {
+        mesh,
+        indirect,
+        caustic,
+        max_specular_depth: settings.max_specular_depth,
+    };
+    render_camera_rays(&view, scene, frame, settings.spp, settings.seed, progress)
 }
 
 impl Integrator for Dept {

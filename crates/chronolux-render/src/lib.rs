@@ -13,9 +13,19 @@
 //! - `bdpt`: bidirectional path tracing ([`bdpt`]), every (s, t) strategy including light
 //!   tracing splatted through [`integrator::render_with_splats`], MIS by the ratio trick —
 //!   the frame-by-frame baseline of the spatio-temporal technique.
+//! - `dept`, `dept-spatial`, `dept-bilateral`: photon tracing with density estimation on
+//!   mesh elements, frame by frame, without / with spatial Gaussian / with spatial
+//!   bilateral filtering (Myszkowski et al. 2001; Weber et al. 2004) — [`dept`], photons
+//!   from the one replayable kernel [`kernels::photon`].
+//! - `spacetime-dept`: the same photons pooled over a per-element temporal window cut by
+//!   an energy test, completed by a spatial bilateral filter (Weber et al. 2004) —
+//!   [`temporal::spacetime_dept`].
 
 pub mod bdpt;
+pub mod dept;
 pub mod integrator;
+pub mod kernels;
 pub mod pt;
 pub mod registry;
 pub mod sequence;
+pub mod temporal;

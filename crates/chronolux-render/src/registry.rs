@@ -1,8 +1,10 @@
 //! The one place where technique names map to types.
 
 use crate::bdpt::{Bdpt, BdptSettings};
+use crate::dept::{Dept, DeptSettings};
 use crate::pt::{PathSettings, PathTracer};
 use crate::sequence::{FrameByFrame, SequenceRenderer};
+use crate::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
 
 /// Techniques selectable with `--method`.
 pub const METHODS: &[(&str, &str)] = &[
@@ -14,6 +16,22 @@ pub const METHODS: &[(&str, &str)] = &[
         "bdpt",
         "bidirectional path tracing, all strategies with MIS, frame by frame",
     ),
+    (
+        "dept",
+        "photon density estimation on mesh elements, frame by frame, no filtering",
+    ),
+    (
+        "dept-spatial",
+        "photon density estimation on mesh elements, spatial Gaussian filter",
+    ),
+    (
+        "dept-bilateral",
+        "photon density estimation on mesh elements, spatial bilateral filter",
+    ),
+    (
+        "spacetime-dept",
+        "photon density estimation on mesh elements, space-time window + bilateral filter",
+    ),
 ];
 
 /// A technique and its settings.
@@ -22,6 +40,10 @@ pub const METHODS: &[(&str, &str)] = &[
 pub enum TechniqueConfig {
     Path(PathSettings),
     Bdpt(BdptSettings),
+    Dept(DeptSettings),
+    DeptSpatial(DeptSettings),
+    DeptBilateral(DeptSettings),
+    SpacetimeDept(SpacetimeSettings),
 }
 
 impl TechniqueConfig {
@@ -35,6 +57,19 @@ impl TechniqueConfig {
                 integrator: Bdpt::new(s.clone()),
                 name: "bdpt",
             }),
+            TechniqueConfig::Dept(s) => Box::new(FrameByFrame {
+                integrator: Dept::new(s.clone()),
+                name: "dept",
+            }),
+            TechniqueConfig::DeptSpatial(s) => Box::new(FrameByFrame {
+                integrator: Dept::new(s.clone()),
+                name: "dept-spatial",
+            }),
+            TechniqueConfig::DeptBilateral(s) => Box::new(FrameByFrame {
+                integrator: Dept::new(s.clone()),
+                name: "dept-bilateral",
+            }),
+            TechniqueConfig::SpacetimeDept(s) => Box::new(SpacetimeDept::new(s.clone())),
         }
     }
 }

@@ -82,8 +82,11 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
     /// Light-transport method. `path`: unidirectional path tracing (the reference);
-    /// `bdpt`: bidirectional path tracing, frame by frame.
-    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt"])]
+    /// `bdpt`: bidirectional path tracing, frame by frame; `dept`, `dept-spatial`,
+    /// `dept-bilateral`: photon density estimation on mesh elements, frame by frame (no,
+    /// Gaussian, bilateral spatial filter); `spacetime-dept`: photons shared over a
+    /// per-element temporal window with a bilateral filter.
+    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept"])]
     pub method: String,
     /// Seed of every random sequence; the same seed gives bit-identical images.
     #[arg(long, default_value_t = 0, value_name = "S")]

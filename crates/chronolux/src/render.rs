@@ -153,6 +153,28 @@ pub fn run(args: RenderArgs) -> Result<()> {
             seed: args.seed,
             ..Default::default()
         }),
+        "dept" => TechniqueConfig::Dept(chronolux_render::dept::DeptSettings {
+            spp: args.spp,
+            seed: args.seed,
+            ..Default::default()
+        }),
+        "dept-spatial" => TechniqueConfig::DeptSpatial(chronolux_render::dept::DeptSettings {
+            spp: args.spp,
+            seed: args.seed,
+            ..chronolux_render::dept::DeptSettings::spatial()
+        }),
+        "dept-bilateral" => TechniqueConfig::DeptBilateral(chronolux_render::dept::DeptSettings {
+            spp: args.spp,
+            seed: args.seed,
+            ..chronolux_render::dept::DeptSettings::bilateral()
+        }),
+        "spacetime-dept" => TechniqueConfig::SpacetimeDept(
+            chronolux_render::temporal::spacetime_dept::SpacetimeSettings {
+                spp: args.spp,
+                seed: args.seed,
+                ..Default::default()
+            },
+        ),
         m => bail!("unknown --method '{m}'"),
     };
     let mut renderer = config.build();

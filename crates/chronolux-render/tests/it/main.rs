@@ -2,9 +2,11 @@
 //! derivable answers.
 
 mod bdpt;
+mod dept;
 mod determinism;
 mod furnace;
 mod peer;
+mod photon;
 
 use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};

@@ -1,0 +1,486 @@
+//! The illumination mesh and its per-element photon accumulators.
+//!
+//! ## Elements
+//! Every triangle of every geometry is split uniformly into `k²` sub-triangles
+//! ("elements"), `k = clamp(⌈longest world edge / element size⌉, 1, MAX_K)`, where the
+//! element size is the scene's bounding-box diagonal divided by a target count. An element
+//! is addressed by (geometry, triangle, barycentrics), never by a world position, so:
+//! - element ids are stable across frames (geometry ids are; the mesh is built once from
+//!   the first frame and reused while the topology matches, [`ElementMesh::matches`]);
+//! - the elements of a moving or deforming object move with it.
+//!
+//! Cells of the `k × k` barycentric grid: `u = b1·k`, `v = b2·k`, cell `(i, j) = (⌊u⌋, ⌊v⌋)`;
+//! the "lower" sub-triangle has vertices `(i,j), (i+1,j), (i,j+1)`, the "upper" one
+//! (`frac(u) + frac(v) > 1`) `(i+1,j+1), (i,j+1), (i+1,j)`. Grid vertices are shared with
+//! neighbouring triangles through the mesh's vertex indices (corners) and edges (points
+//! along an edge whose two triangles have the same `k`), which is what makes the
+//! interpolated solution continuous across triangles of a smooth mesh; meshes that split
+//! vertices (hard edges, UV seams) stay discontinuous there, as they should.
+//!
+//! ## Accumulators
+//! Per element and side (front = the side the geometric normal points to), per frame:
+//! photon flux sum (RGB), photon count, and sum of squared luminance flux (for the noise
+//! estimate of the reconstruction). Not hit points: memory is O(elements).
+
+use crate::kernels::photon::{PhotonHit, PhotonStats, trace_photons};
+use chronolux_core::accel::TriRef;
+use chronolux_core::color::{Rgb, luminance};
+use chronolux_core::math::{Affine3A, Vec3};
+use chronolux_core::scene::frame::FrameScene;
+use std::collections::HashMap;
+
+/// Largest subdivision of one triangle (k² = 4096 elements).
+pub const MAX_K: u32 = 64;
+
+/// World transform of every geometry's vertex data (identity for world-space data).
+///
+/// `FrameScene` does not store which instance carries a geometry; the frame builder places
+/// every rigid node as one instance whose `geometry_base` is the node's first geometry id,
+/// after the static instance (base 0), so the last instance with that base is the one.
+pub fn geometry_transforms(scene: &FrameScene) -> Vec<Affine3A> {
+    let inst = scene.accel.instances();
+    let geo = &scene.geometry;
+    let mut first = 0usize;
+    (0..geo.len())
+        .map(|gid| {
+            if gid > 0 && geo[gid - 1].node != geo[gid].node {
+                first = gid;
+            }
+            if geo[gid].world_space {
+                return Affine3A::IDENTITY;
+            }
+            inst.iter()
+                .rev()
+                .find(|i| i.geometry_base == first as u32)
+                .map_or(Affine3A::IDENTITY, |i| i.world_from_object)
+        })
+        .collect()
+}
+
+/// Where a surface point falls on the element mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Located {
+    pub element: u32,
+    /// Global ids of the element's three grid vertices.
+    pub vertices: [u32; 3],
+    /// Barycentric weights of the point w.r.t. those vertices.
+    pub weights: [f32; 3],
+}
+
+/// The illumination mesh: element and grid-vertex ids of every triangle.
+#[derive(Clone, Debug)]
+pub struct ElementMesh {
+    /// Target element edge length (world units, in the frame it was built from).
+    pub element_size: f32,
+    /// First global triangle of each geometry (len = geometries + 1).
+    geom_tri: Vec<u32>,
+    /// Subdivision of each triangle.
+    tri_k: Vec<u32>,
+    /// First element of each triangle (len = triangles + 1).
+    tri_elem: Vec<u32>,
+    /// First entry of each triangle in `vert_ids` (len = triangles + 1).
+    tri_vert: Vec<u32>,
+    /// Global vertex id of each local grid vertex, per triangle.
+    vert_ids: Vec<u32>,
+    /// Global triangle of each element.
+    elem_tri: Vec<u32>,
+    /// Grid vertices of each element.
+    elem_verts: Vec<[u32; 3]>,
+    n_vertices: u32,
+}
+
+/// Local index of grid vertex (i, j), i + j ≤ k.
+#[inline]
+fn grid_index(k: u32, i: u32, j: u32) -> u32 {
+    i * (k + 1) - i * i.saturating_sub(1) / 2 + j
+}
+
+/// Local element index of the lower (`up = false`) or upper cell (i, j).
+#[inline]
+fn cell_index(k: u32, i: u32, j: u32, up: bool) -> u32 {
+    if !up {
+        i * k - i * i.saturating_sub(1) / 2 + j
+    } else {
+        k * (k + 1) / 2 + i * (k - 1) - i * i.saturating_sub(1) / 2 + j
+    }
+}
+
+/// Local grid vertices (i, j) of a cell.
+#[inline]
+fn cell_vertices(i: u32, j: u32, up: bool) -> [(u32, u32); 3] {
+    if up {
+        [(i + 1, j + 1), (i, j + 1), (i + 1, j)]
+    } else {
+        [(i, j), (i + 1, j), (i, j + 1)]
+    }
+}
+
+impl ElementMesh {
+    /// Elements for `scene` with edge ≈ `diagonal / elements_per_diagonal`.
+    pub fn build(scene: &FrameScene, elements_per_diagonal: f32) -> ElementMesh {
+        let diag = scene.bounds.diagonal().length();
+        let h = if diag > 0.0 && elements_per_diagonal > 0.0 {
+            diag / elements_per_diagonal
+        } else {
+            1.0
+        };
+        let xf = geometry_transforms(scene);
+        let mut m = ElementMesh {
+            element_size: h,
+            geom_tri: vec![0],
+            tri_k: Vec::new(),
+            tri_elem: vec![0],
+            tri_vert: vec![0],
+            vert_ids: Vec::new(),
+            elem_tri: Vec::new(),
+            elem_verts: Vec::new(),
+            n_vertices: 0,
+        };
+        for (gid, g) in scene.geometry.iter().enumerate() {
+            // Shared grid vertices of this geometry: corners by mesh vertex, edge points
+            // by (edge, k, step from the lower-indexed end).
+            let mut corner: HashMap<u32, u32> = HashMap::new();
+            let mut edge: HashMap<(u32, u32, u32, u32), u32> = HashMap::new();
+            for tri in g.indices.iter() {
+                let p = tri.map(|i| xf[gid].transform_point3(g.positions[i as usize]));
+                let longest = (p[1] - p[0])
+                    .length()
+                    .max((p[2] - p[1]).length())
+                    .max((p[0] - p[2]).length());
+                let k = ((longest / h).ceil() as u32).clamp(1, MAX_K);
+                let t = m.tri_k.len() as u32;
+                m.tri_k.push(k);
+                let mut next = m.n_vertices;
+                let mut fresh = || {
+                    next += 1;
+                    next - 1
+                };
+                let mut shared_edge = |a: u32, b: u32, s: u32, fresh: &mut dyn FnMut() -> u32| {
+                    let key = if a < b {
+                        (a, b, k, s)
+                    } else {
+                        (b, a, k, k - s)
+                    };
+                    *edge.entry(key).or_insert_with(fresh)
+                };
+                for i in 0..=k {
+                    for j in 0..=(k - i) {
+                        let id = match (i, j) {
+                            (0, 0) => *corner.entry(tri[0]).or_insert_with(&mut fresh),
+                            (i, 0) if i == k => *corner.entry(tri[1]).or_insert_with(&mut fresh),
+                            (0, j) if j == k => *corner.entry(tri[2]).or_insert_with(&mut fresh),
+                            (i, 0) => shared_edge(tri[0], tri[1], i, &mut fresh),
+                            (0, j) => shared_edge(tri[0], tri[2], j, &mut fresh),
+                            (i, j) if i + j == k => shared_edge(tri[1], tri[2], j, &mut fresh),
+                            _ => fresh(),
+                        };
+                        debug_assert_eq!(
+                            m.vert_ids.len() as u32 - m.tri_vert[t as usize],
+                            grid_index(k, i, j)
+                        );
+                        m.vert_ids.push(id);
+                    }
+                }
+                m.n_vertices = next;
+                m.tri_vert.push(m.vert_ids.len() as u32);
+                let base = m.tri_vert[t as usize];
+                let mut cells = vec![[0u32; 3]; (k * k) as usize];
+                for i in 0..k {
+                    for j in 0..k - i {
+                        for up in [false, true] {
+                            if up && i + j + 2 > k {
+                                continue;
+                            }
+                            let v = cell_vertices(i, j, up)
+                                .map(|(a, b)| m.vert_ids[(base + grid_index(k, a, b)) as usize]);
+                            cells[cell_index(k, i, j, up) as usize] = v;
+                        }
+                    }
+                }
+                m.elem_verts.extend(cells);
+                m.elem_tri.extend(std::iter::repeat_n(t, (k * k) as usize));
+                m.tri_elem.push(m.elem_verts.len() as u32);
+            }
+            m.geom_tri.push(m.tri_k.len() as u32);
+        }
+        m
+    }
+
+    /// True when `scene` has the topology this mesh was built for (same geometries and
+    /// triangle counts), so element ids carry over.
+    pub fn matches(&self, scene: &FrameScene) -> bool {
+        self.geom_tri.len() == scene.geometry.len() + 1
+            && scene
+                .geometry
+                .iter()
+                .enumerate()
+                .all(|(g, d)| self.geom_tri[g + 1] - self.geom_tri[g] == d.indices.len() as u32)
+    }
+
+    pub fn element_count(&self) -> usize {
+        self.elem_tri.len()
+    }
+
+    pub fn vertex_count(&self) -> usize {
+        self.n_vertices as usize
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.tri_k.len()
+    }
+
+    /// Global triangle index of a triangle reference.
+    #[inline]
+    pub fn triangle(&self, tri: TriRef) -> u32 {
+        self.geom_tri[tri.geometry as usize] + tri.triangle
+    }
+
+    /// Subdivision `k` of a global triangle.
+    #[inline]
+    pub fn subdivision(&self, t: u32) -> u32 {
+        self.tri_k[t as usize]
+    }
+
+    /// Elements of a global triangle.
+    #[inline]
+    pub fn elements_of(&self, t: u32) -> std::ops::Range<u32> {
+        self.tri_elem[t as usize]..self.tri_elem[t as usize + 1]
+    }
+
+    /// Global triangle of an element.
+    #[inline]
+    pub fn element_triangle(&self, e: u32) -> u32 {
+        self.elem_tri[e as usize]
+    }
+
+    /// Grid vertices of an element.
+    #[inline]
+    pub fn element_vertices(&self, e: u32) -> [u32; 3] {
+        self.elem_verts[e as usize]
+    }
+
+    /// Barycentrics (b1, b2) on its triangle of an element's centroid.
+    pub fn element_centroid_bary(&self, e: u32) -> (f32, f32) {
+        let t = self.elem_tri[e as usize];
+        let k = self.tri_k[t as usize];
+        let local = e - self.tri_elem[t as usize];
+        let lower = k * (k + 1) / 2;
+        let (up, mut rest) = if local < lower {
+            (false, local)
+        } else {
+            (true, local - lower)
+        };
+        let row_len = |i: u32| if up { k - 1 - i } else { k - i };
+        let mut i = 0;
+        while rest >= row_len(i) {
+            rest -= row_len(i);
+            i += 1;
+        }
+        let j = rest;
+        let v = cell_vertices(i, j, up);
+        let s = v
+            .iter()
+            .fold((0.0, 0.0), |a, (x, y)| (a.0 + *x as f32, a.1 + *y as f32));
+        (s.0 / (3.0 * k as f32), s.1 / (3.0 * k as f32))
+    }
+
+    /// Element containing barycentrics (b1, b2) of triangle `tri`.
+    #[inline]
+    pub fn locate(&self, tri: TriRef, b1: f32, b2: f32) -> Located {
+        let t = self.triangle(tri);
+        let k = self.tri_k[t as usize];
+        let kf = k as f32;
+        let u = (b1.clamp(0.0, 1.0) * kf).min(kf);
+        let v = (b2.clamp(0.0, 1.0) * kf).min(kf);
+        let i = (u.floor() as u32).min(k - 1);
+        // Points past the far edge by rounding fall into the last cell of their row.
+        let j = (v.floor() as u32).min(k - 1 - i);
+        let (fu, fv) = (u - i as f32, v - j as f32);
+        let up = fu + fv > 1.0 && i + j + 2 <= k;
+        let weights = if up {
+            [fu + fv - 1.0, 1.0 - fu, 1.0 - fv]
+        } else {
+            [1.0 - fu - fv, fu, fv]
+        }
+        .map(|w| w.clamp(0.0, 1.0));
+        let e = self.tri_elem[t as usize] + cell_index(k, i, j, up);
+        Located {
+            element: e,
+            vertices: self.elem_verts[e as usize],
+            weights,
+        }
+    }
+}
+
+/// Side slot of an element: `2·element + side`, side 0 = front (geometric normal's side).
+#[inline]
+pub fn slot(element: u32, front: bool) -> usize {
+    2 * element as usize + (!front) as usize
+}
+
+/// Per element-side photon sums of one frame.
+#[derive(Clone, Debug, Default)]
+pub struct ElementAccumulators {
+    /// Σ flux (per emitted photon: divide by `photons` for watts).
+    pub flux: Vec<Rgb>,
+    /// Number of photons.
+    pub count: Vec<u32>,
+    /// Σ luminance(flux)².
+    pub flux_sq: Vec<f32>,
+    /// Photons emitted for these sums.
+    pub photons: u64,
+}
+
+impl ElementAccumulators {
+    pub fn new(elements: usize) -> Self {
+        ElementAccumulators {
+            flux: vec![Rgb::ZERO; 2 * elements],
+            count: vec![0; 2 * elements],
+            flux_sq: vec![0.0; 2 * elements],
+            photons: 0,
+        }
+    }
+
+    #[inline]
+    pub fn deposit(&mut self, slot: usize, power: Rgb) {
+        self.flux[slot] += power;
+        self.count[slot] += 1;
+        let l = luminance(power);
+        self.flux_sq[slot] += l * l;
+    }
+
+    /// Total deposited flux (watts: Σ flux / photons).
+    pub fn total_power(&self) -> Rgb {
+        self.flux.iter().copied().sum::<Rgb>() / self.photons.max(1) as f32
+    }
+}
+
+/// The photons of one frame on the element mesh: indirect (at least one bounce, not a
+/// pure specular chain) and caustic (light → specular⁺ → diffuse) kept apart; photons
+/// straight from the lights are not stored (direct light is computed per pixel).
+#[derive(Clone, Debug)]
+pub struct FramePhotons {
+    pub indirect: ElementAccumulators,
+    pub caustic: ElementAccumulators,
+    pub stats: PhotonStats,
+}
+
+/// Photons traced per batch (bounds the memory of the in-order deposit lists).
+const BATCH: u64 = 1 << 18;
+
+/// Traces photons `indices` (stream `seed`) and deposits them on `mesh`'s elements.
+/// Deterministic for any thread count (deposits are summed in photon-index order).
+pub fn deposit_photons(
+    scene: &FrameScene,
+    mesh: &ElementMesh,
+    indices: std::ops::Range<u64>,
+    seed: u64,
+) -> FramePhotons {
+    let n = mesh.element_count();
+    let mut out = FramePhotons {
+        indirect: ElementAccumulators::new(n),
+        caustic: ElementAccumulators::new(n),
+        stats: PhotonStats::default(),
+    };
+    let photons = indices.end.saturating_sub(indices.start);
+    out.indirect.photons = photons;
+    out.caustic.photons = photons;
+    let mut lo = indices.start;
+    while lo < indices.end {
+        let hi = (lo + BATCH).min(indices.end);
+        let (hits, stats) = trace_photons(scene, lo..hi, seed, |h: &PhotonHit| {
+            if !h.is_indirect() {
+                return None;
+            }
+            let e = mesh.locate(h.tri, h.b1, h.b2).element;
+            Some((slot(e, h.wi.dot(h.ng) >= 0.0) as u32, h.power, h.caustic))
+        });
+        for (s, p, c) in hits {
+            if c {
+                out.caustic.deposit(s as usize, p);
+            } else {
+                out.indirect.deposit(s as usize, p);
+            }
+        }
+        out.stats += stats;
+        lo = hi;
+    }
+    out
+}
+
+/// World-space data of the elements in one frame.
+#[derive(Clone, Debug)]
+pub struct FrameElements {
+    /// Area of each element.
+    pub area: Vec<f32>,
+    /// Centroid of each element.
+    pub centroid: Vec<Vec3>,
+    /// Unit geometric normal of each element (its triangle's).
+    pub normal: Vec<Vec3>,
+}
+
+impl FrameElements {
+    pub fn new(scene: &FrameScene, mesh: &ElementMesh) -> Self {
+        let xf = geometry_transforms(scene);
+        let n = mesh.element_count();
+        let mut f = FrameElements {
+            area: Vec::with_capacity(n),
+            centroid: Vec::with_capacity(n),
+            normal: Vec::with_capacity(n),
+        };
+        for (gid, g) in scene.geometry.iter().enumerate() {
+            let flip = xf[gid].matrix3.determinant() < 0.0;
+            for (ti, tri) in g.indices.iter().enumerate() {
+                let p = tri.map(|i| xf[gid].transform_point3(g.positions[i as usize]));
+                let c = (p[1] - p[0]).cross(p[2] - p[0]);
+                let t = mesh.triangle(TriRef {
+                    geometry: gid as u32,
+                    triangle: ti as u32,
+                });
+                let k = mesh.subdivision(t);
+                let a = 0.5 * c.length() / (k * k) as f32;
+                let nrm = if flip { -c } else { c }.normalize_or_zero();
+                for e in mesh.elements_of(t) {
+                    let (b1, b2) = mesh.element_centroid_bary(e);
+                    f.area.push(a);
+                    f.centroid
+                        .push((1.0 - b1 - b2) * p[0] + b1 * p[1] + b2 * p[2]);
+                    f.normal.push(nrm);
+                }
+            }
+        }
+        f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_and_cell_indices_are_dense() {
+        for k in 1..7u32 {
+            let mut seen = vec![false; (k * k) as usize];
+            for i in 0..k {
+                for j in 0..k - i {
+                    for up in [false, true] {
+                        if up && i + j + 2 > k {
+                            continue;
+                        }
+                        let c = cell_index(k, i, j, up) as usize;
+                        assert!(!seen[c]);
+                        seen[c] = true;
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&s| s));
+            let mut g = 0;
+            for i in 0..=k {
+                for j in 0..=k - i {
+                    assert_eq!(grid_index(k, i, j), g);
+                    g += 1;
+                }
+            }
+        }
+    }
+}

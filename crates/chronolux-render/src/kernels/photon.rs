@@ -1,0 +1,260 @@
+//! The one photon-tracing kernel, shared by every photon method (density estimation on
+//! elements, selective photon tracing, photon maps).
+//!
+//! ## Replayable, quasi-random photons
+//! Photon `index` is generated from Halton point `index` (scrambled per dimension by
+//! `seed`, [`chronolux_core::sampling::qmc::halton`]) with one dimension per decision, in
+//! this fixed order:
+//!
+//! | dimension | decision |
+//! | --- | --- |
+//! | 0 | light choice (power-proportional [`LightSampler`](chronolux_core::light::LightSampler)) |
+//! | 1, 2 | position on the light ([`Light::sample_le`] `u_pos`) |
+//! | 3, 4 | direction ([`Light::sample_le`] `u_dir`) |
+//! | 5 + 4b | bounce b: BSDF lobe |
+//! | 6 + 4b, 7 + 4b | bounce b: BSDF direction |
+//! | 8 + 4b | bounce b: Russian roulette |
+//!
+//! Every dimension is consumed whether or not it is used, so photon `index` follows the
+//! same path in any scene where the same decisions lead to the same surfaces: re-tracing
+//! photon `i` in another frame is exactly `trace_photon(scene', i, seed, ..)`. (Dimensions
+//! beyond the 64 prime bases wrap around; that happens after 14 bounces only.)
+//!
+//! ## Power
+//! A photon starts with flux `le·|cos|/(pdf_pos·pdf_dir·pmf(light))` (an unbiased estimate
+//! of the total emitted power, so the power of `N` photons is their sum divided by `N`).
+//! Bounces sample the BSDF in [`TransportMode::Importance`] (the adjoint shading-normal
+//! correction is applied inside [`chronolux_core::bsdf::Bsdf`]); Russian roulette keeps the
+//! photon with probability `q = min(1, max(β·w)/max(β))` and divides by `q`, so the carried
+//! power stays roughly constant (Jensen's photon map rule).
+//!
+//! ## What is reported
+//! Every hit on a surface with a non-delta lobe ("diffuse hit") is reported to the
+//! callback with the power arriving there, before the photon scatters on. Hits on purely
+//! specular (delta) surfaces are not reported.
+
+use chronolux_core::accel::TriRef;
+use chronolux_core::bsdf::TransportMode;
+use chronolux_core::color::{Rgb, max_component};
+use chronolux_core::geometry::spawn_ray;
+use chronolux_core::light::Light;
+use chronolux_core::material;
+use chronolux_core::math::{Vec2, Vec3};
+use chronolux_core::parallel;
+use chronolux_core::sampling::qmc::halton;
+use chronolux_core::scene::frame::FrameScene;
+
+/// Hard cap on the number of bounces of one photon (Russian roulette ends paths long
+/// before it except in pathological all-white scenes).
+pub const MAX_BOUNCES: u32 = 64;
+
+/// First Halton dimension of bounce `b`.
+#[inline]
+pub const fn bounce_dim(b: u32) -> usize {
+    5 + 4 * b as usize
+}
+
+/// A photon arriving at a surface with a non-delta lobe.
+#[derive(Clone, Copy, Debug)]
+pub struct PhotonHit {
+    /// Index of the photon (its Halton point).
+    pub index: u64,
+    /// World-space hit point.
+    pub p: Vec3,
+    /// Geometric normal (world, unit, front per winding).
+    pub ng: Vec3,
+    /// Triangle hit (stable [`GeometryId`](chronolux_core::scene::frame::GeometryId) and
+    /// triangle index) and the instance it was hit through.
+    pub tri: TriRef,
+    pub instance: u32,
+    /// Barycentrics of the hit point on the triangle (vertices 1 and 2).
+    pub b1: f32,
+    pub b2: f32,
+    /// Unit direction from the hit point back towards where the photon came from.
+    pub wi: Vec3,
+    /// Flux carried (per emitted photon: the flux estimate of `N` photons is Σ power / N).
+    pub power: Rgb,
+    /// Scattering events before this hit: 0 = straight from the light.
+    pub bounces: u32,
+    /// All of the (at least one) scattering events before this hit were specular (delta):
+    /// a caustic photon (light → specular⁺ → here).
+    pub caustic: bool,
+}
+
+impl PhotonHit {
+    /// True when the photon did at least one bounce (indirect illumination, caustics included).
+    #[inline]
+    pub fn is_indirect(&self) -> bool {
+        self.bounces > 0
+    }
+}
+
+/// What tracing one photon cost.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhotonStats {
+    /// Closest-hit rays cast.
+    pub rays: u64,
+    /// Hits reported.
+    pub hits: u64,
+}
+
+impl std::ops::AddAssign for PhotonStats {
+    fn add_assign(&mut self, o: Self) {
+        self.rays += o.rays;
+        self.hits += o.hits;
+    }
+}
+
+/// Emitted radiance factor of a light at the origin of a sampled emission ray, with the
+/// emission texture of triangle lights evaluated there.
+fn emission_factor(scene: &FrameScene, light: &Light, o: Vec3, le: Rgb) -> Rgb {
+    let Light::Triangle {
+        p0,
+        e1,
+        e2,
+        tri,
+        instance,
+        ..
+    } = light
+    else {
+        return le;
+    };
+    let g = &scene.geometry[tri.geometry as usize];
+    let m = &scene.materials[g.material as usize];
+    if m.emissive_texture.is_none() {
+        return le;
+    }
+    // Barycentrics of the (slightly offset) origin by least squares on the edges.
+    let d = o - *p0;
+    let (a11, a12, a22) = (e1.dot(*e1), e1.dot(*e2), e2.dot(*e2));
+    let det = a11 * a22 - a12 * a12;
+    if det.abs() <= 0.0 {
+        return le;
+    }
+    let (r1, r2) = (d.dot(*e1), d.dot(*e2));
+    let b1 = ((a22 * r1 - a12 * r2) / det).clamp(0.0, 1.0);
+    let b2 = ((a11 * r2 - a12 * r1) / det).clamp(0.0, 1.0 - b1);
+    let si = scene.surface_at(*tri, *instance, b1, b2, None);
+    material::emission_at(m, &scene.textures, &si.shading)
+}
+
+/// Traces photon `index` of the stream keyed by `seed` through `scene`, reporting every
+/// diffuse hit to `callback` in path order. Deterministic: the same (scene, index, seed)
+/// always gives the same hits.
+pub fn trace_photon(
+    scene: &FrameScene,
+    index: u64,
+    seed: u64,
+    mut callback: impl FnMut(&PhotonHit),
+) -> PhotonStats {
+    let mut stats = PhotonStats::default();
+    let h = |dim: usize| halton(dim, index, seed);
+    let Some((li, pmf, _)) = scene.light_sampler.sample(h(0)) else {
+        return stats;
+    };
+    if pmf <= 0.0 {
+        return stats;
+    }
+    let light = &scene.lights[li];
+    let (center, radius) = scene.bounds.bounding_sphere();
+    let Some(les) = light.sample_le(Vec2::new(h(1), h(2)), Vec2::new(h(3), h(4)), center, radius)
+    else {
+        return stats;
+    };
+    if les.pdf_pos <= 0.0 || les.pdf_dir <= 0.0 {
+        return stats;
+    }
+    let le = emission_factor(scene, light, les.ray.o, les.le);
+    let mut beta = chronolux_core::light::emit::LeSample { le, ..les }.flux_weight() / pmf;
+    if beta == Rgb::ZERO || !beta.is_finite() {
+        return stats;
+    }
+    let mut ray = les.ray;
+    let mut bounces = 0u32;
+    let mut all_specular = true;
+    loop {
+        stats.rays += 1;
+        let Some(hit) = scene.intersect(&ray) else {
+            break;
+        };
+        let si = scene.interaction(&hit, &ray);
+        let wo = -ray.d.normalize();
+        let mat = &scene.materials[si.material as usize];
+        let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
+        if bsdf.has_non_delta() {
+            stats.hits += 1;
+            callback(&PhotonHit {
+                index,
+                p: si.p,
+                ng: si.ng,
+                tri: hit.tri,
+                instance: hit.instance,
+                b1: hit.b1,
+                b2: hit.b2,
+                wi: wo,
+                power: beta,
+                bounces,
+                caustic: bounces > 0 && all_specular,
+            });
+        }
+        if bounces >= MAX_BOUNCES {
+            break;
+        }
+        let d = bounce_dim(bounces);
+        let Some(bs) = bsdf.sample(
+            wo,
+            h(d),
+            Vec2::new(h(d + 1), h(d + 2)),
+            TransportMode::Importance,
+        ) else {
+            break;
+        };
+        let new_beta = beta * bs.weight;
+        let q = (max_component(new_beta) / max_component(beta)).min(1.0);
+        if !(q > 0.0) || h(d + 3) >= q {
+            break;
+        }
+        beta = new_beta / q;
+        all_specular &= bs.is_delta;
+        bounces += 1;
+        ray = spawn_ray(si.p, si.ng, bs.wi);
+    }
+    stats
+}
+
+/// Photons per parallel work item. Results do not depend on it.
+pub const PHOTON_CHUNK: u64 = 2048;
+
+/// Traces photons `indices` in parallel (chunks of [`PHOTON_CHUNK`]) and returns what
+/// `map` keeps of their hits, in photon-index order then path order — bit-identical for
+/// any thread count.
+pub fn trace_photons<T: Send>(
+    scene: &FrameScene,
+    indices: std::ops::Range<u64>,
+    seed: u64,
+    map: impl Fn(&PhotonHit) -> Option<T> + Sync,
+) -> (Vec<T>, PhotonStats) {
+    let n = indices.end.saturating_sub(indices.start);
+    let chunks = parallel::map_chunks(n.div_ceil(PHOTON_CHUNK) as usize, 1, |r| {
+        let c = r.start as u64;
+        let lo = indices.start + c * PHOTON_CHUNK;
+        let hi = (lo + PHOTON_CHUNK).min(indices.end);
+        let mut out = Vec::new();
+        let mut stats = PhotonStats::default();
+        for i in lo..hi {
+            stats += trace_photon(scene, i, seed, |hit| {
+                if let Some(t) = map(hit) {
+                    out.push(t);
+                }
+            });
+        }
+        (out, stats)
+    });
+    let mut all = Vec::with_capacity(chunks.iter().map(|c| c.0.len()).sum());
+    let mut stats = PhotonStats::default();
+    for (v, s) in chunks {
+        all.extend(v);
+        stats += s;
+    }
+    (all, stats)
+}

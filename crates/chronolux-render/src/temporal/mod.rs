@@ -1,0 +1,7 @@
+//! Temporal techniques: sequence renderers that keep state between frames and call the
+//! same kernels as their frame-by-frame baselines.
+//!
+//! - [`spacetime_dept`]: space-time photon density estimation on mesh elements with a
+//!   spatio-temporal bilateral filter (Weber et al. 2004), baseline `dept-spatial`.
+
+pub mod spacetime_dept;

@@ -146,7 +146,7 @@ impl RadianceEstimator for PathTracer {
                 let light = &scene.lights[li_idx];
                 if let Some(ls) = light.sample_li(si.p, u_lp, scene.scene_radius) {
                     let f =
-                        bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(si.shading.ns).abs();
+                        bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.n).abs();
                     if f != Rgb::ZERO {
                         let shadow = spawn_ray_to(si.p, si.ng, ls.p, ls.n);
                         stats.shadow_rays += 1;

@@ -75,7 +75,7 @@ pub fn direct_light_sample(
     if pmf <= 0.0 || ls.pdf <= 0.0 {
         return Rgb::ZERO;
     }
-    let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(si.shading.ns).abs();
+    let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.n).abs();
     if f == Rgb::ZERO {
         return Rgb::ZERO;
     }

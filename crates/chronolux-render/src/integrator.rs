@@ -59,15 +59,30 @@ pub fn render_camera_rays<E: RadianceEstimator>(
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderedFrame {
+    render_camera_rays_tiled(est, scene, frame, spp, seed, TILE, progress)
+}
+
+/// [`render_camera_rays`] with tiles of `tile`×`tile` pixels; the image is bit-identical
+/// for every tile size (a test checks it), which only changes the grain of parallel work.
+pub fn render_camera_rays_tiled<E: RadianceEstimator>(
+    est: &E,
+    scene: &FrameScene,
+    frame: u32,
+    spp: u32,
+    seed: u64,
+    tile: u32,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderedFrame {
     let cam = &scene.camera;
     let (w, h) = (cam.width, cam.height);
-    let tiles_x = w.div_ceil(TILE);
-    let tiles_y = h.div_ceil(TILE);
+    let tile = tile.max(1);
+    let tiles_x = w.div_ceil(tile);
+    let tiles_y = h.div_ceil(tile);
     let n_tiles = (tiles_x * tiles_y) as usize;
     let results = parallel::map_chunks(n_tiles, 1, |range| {
         let t = range.start as u32;
-        let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-        let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+        let (x0, y0) = ((t % tiles_x) * tile, (t / tiles_x) * tile);
+        let (tw, th) = (tile.min(w - x0), tile.min(h - y0));
         let mut film = Film::new(tw, th);
         let mut stats = Stats::default();
         let mut invalid = 0u64;

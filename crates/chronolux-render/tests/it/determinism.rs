@@ -35,3 +35,24 @@ fn bit_identical_across_thread_counts() {
     );
     assert_eq!(a.stats, b.stats);
 }
+
+#[test]
+fn bit_identical_across_tile_sizes() {
+    use chronolux_render::integrator::render_camera_rays_tiled;
+    let scene = frame0(furnace(0.6, 0.4), 37, 21);
+    let pt = PathTracer::new(PathSettings {
+        spp: 4,
+        ..Default::default()
+    });
+    let a = render_camera_rays_tiled(&pt, &scene, 1, 4, 9, 16, &|_| {});
+    for tile in [1, 5, 64] {
+        let b = render_camera_rays_tiled(&pt, &scene, 1, 4, 9, tile, &|_| {});
+        assert!(
+            a.pixels
+                .iter()
+                .zip(&b.pixels)
+                .all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)),
+            "tile {tile}"
+        );
+    }
+}

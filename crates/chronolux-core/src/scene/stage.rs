@@ -97,6 +97,9 @@ pub fn cornell_box() -> SceneDesc {
         &mut d,
         Material {
             emissive: LIGHT_RADIANCE,
+            // One-sided: a lamp that also emitted upwards would light the thin gap under
+            // the ceiling, a tiny bright region that paths find only by chance (fireflies).
+            double_sided: false,
             ..Material::diffuse("light", Rgb::splat(0.78))
         },
     );

@@ -7,6 +7,8 @@
 //! over the instances rebuilt per frame (a handful of boxes). Closest-hit and any-hit
 //! queries take an `accept` filter so alpha-masked surfaces can be skipped during traversal.
 
+pub mod multi_frame;
+
 use crate::geometry::{Bounds3, PreparedTriangle, Ray};
 use crate::math::{Affine3A, Vec3, Vec3A};
 use obvhs::{

@@ -5,6 +5,7 @@ mod bdpt;
 mod dept;
 mod determinism;
 mod furnace;
+mod multi_frame;
 mod peer;
 mod photon;
 

@@ -162,6 +162,75 @@ impl Instance {
         }
     }
 
+    /// Closest hit in this instance (world-space t, frame-wide geometry id).
+    #[inline]
+    pub(crate) fn closest_world<F: Fn(TriRef, f32, f32) -> bool>(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        tmax: f32,
+        accept: &F,
+    ) -> Option<(f32, TriRef, f32, f32)> {
+        let base = self.geometry_base;
+        let acc = |t: TriRef, b1, b2| {
+            accept(
+                TriRef {
+                    geometry: t.geometry + base,
+                    ..t
+                },
+                b1,
+                b2,
+            )
+        };
+        let h = if self.identity {
+            self.blas.closest(o, d, tmax, &acc)
+        } else {
+            let lo = self.object_from_world.transform_point3a(o);
+            let ld = self.object_from_world.transform_vector3a(d);
+            self.blas.closest(lo, ld, tmax, &acc)
+        };
+        h.map(|(t, tri, b1, b2)| {
+            (
+                t,
+                TriRef {
+                    geometry: tri.geometry + base,
+                    ..tri
+                },
+                b1,
+                b2,
+            )
+        })
+    }
+
+    /// Whether anything in this instance blocks the ray before `tmax` (world-space t).
+    #[inline]
+    pub(crate) fn any_world<F: Fn(TriRef, f32, f32) -> bool>(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        tmax: f32,
+        accept: &F,
+    ) -> bool {
+        let base = self.geometry_base;
+        let acc = |t: TriRef, b1, b2| {
+            accept(
+                TriRef {
+                    geometry: t.geometry + base,
+                    ..t
+                },
+                b1,
+                b2,
+            )
+        };
+        if self.identity {
+            self.blas.any(o, d, tmax, &acc)
+        } else {
+            let lo = self.object_from_world.transform_point3a(o);
+            let ld = self.object_from_world.transform_vector3a(d);
+            self.blas.any(lo, ld, tmax, &acc)
+        }
+    }
+
     pub fn with_geometry_base(mut self, base: u32) -> Self {
         self.geometry_base = base;
         self
@@ -251,37 +320,7 @@ impl Accel {
     /// for BLASes that need filtering).
     pub fn intersect<F: Fn(TriRef, f32, f32) -> bool>(&self, ray: &Ray, accept: F) -> Option<Hit> {
         let (o, d): (Vec3A, Vec3A) = (ray.o.into(), ray.d.into());
-        let local = |inst: &Instance, tmax: f32| {
-            let base = inst.geometry_base;
-            let acc = |t: TriRef, b1, b2| {
-                accept(
-                    TriRef {
-                        geometry: t.geometry + base,
-                        ..t
-                    },
-                    b1,
-                    b2,
-                )
-            };
-            let h = if inst.identity {
-                inst.blas.closest(o, d, tmax, &acc)
-            } else {
-                let lo = inst.object_from_world.transform_point3a(o);
-                let ld = inst.object_from_world.transform_vector3a(d);
-                inst.blas.closest(lo, ld, tmax, &acc)
-            };
-            h.map(|(t, tri, b1, b2)| {
-                (
-                    t,
-                    TriRef {
-                        geometry: tri.geometry + base,
-                        ..tri
-                    },
-                    b1,
-                    b2,
-                )
-            })
-        };
+        let local = |inst: &Instance, tmax: f32| inst.closest_world(o, d, tmax, &accept);
         match &self.tlas {
             None => {
                 let inst = self.instances.first()?;
@@ -320,26 +359,7 @@ impl Accel {
     /// True if anything `accept`s along the ray with `t < ray.tmax`.
     pub fn occluded<F: Fn(TriRef, f32, f32) -> bool>(&self, ray: &Ray, accept: F) -> bool {
         let (o, d): (Vec3A, Vec3A) = (ray.o.into(), ray.d.into());
-        let local = |inst: &Instance, tmax: f32| {
-            let base = inst.geometry_base;
-            let acc = |t: TriRef, b1, b2| {
-                accept(
-                    TriRef {
-                        geometry: t.geometry + base,
-                        ..t
-                    },
-                    b1,
-                    b2,
-                )
-            };
-            if inst.identity {
-                inst.blas.any(o, d, tmax, &acc)
-            } else {
-                let lo = inst.object_from_world.transform_point3a(o);
-                let ld = inst.object_from_world.transform_vector3a(d);
-                inst.blas.any(lo, ld, tmax, &acc)
-            }
-        };
+        let local = |inst: &Instance, tmax: f32| inst.any_world(o, d, tmax, &accept);
         match &self.tlas {
             None => self.instances.first().is_some_and(|i| local(i, ray.tmax)),
             Some(tlas) => !tlas.ray_traverse_miss(oray(o, d, ray.tmax), |r, slot| {

@@ -147,74 +147,6 @@ fn same_placement(a: &Instance, b: &Instance) -> bool {
         && a.geometry_base == b.geometry_base
 }
 
-/// Closest hit in one instance (world-space t, frame-wide geometry id).
-#[inline]
-fn instance_closest<F: Fn(TriRef, f32, f32) -> bool>(
-    inst: &Instance,
-    o: Vec3A,
-    d: Vec3A,
-    tmax: f32,
-    accept: &F,
-) -> Option<(f32, TriRef, f32, f32)> {
-    let base = inst.geometry_base;
-    let acc = |t: TriRef, b1, b2| {
-        accept(
-            TriRef {
-                geometry: t.geometry + base,
-                ..t
-            },
-            b1,
-            b2,
-        )
-    };
-    let h = if inst.identity {
-        inst.blas.closest(o, d, tmax, &acc)
-    } else {
-        let lo = inst.object_from_world.transform_point3a(o);
-        let ld = inst.object_from_world.transform_vector3a(d);
-        inst.blas.closest(lo, ld, tmax, &acc)
-    };
-    h.map(|(t, tri, b1, b2)| {
-        (
-            t,
-            TriRef {
-                geometry: tri.geometry + base,
-                ..tri
-            },
-            b1,
-            b2,
-        )
-    })
-}
-
-#[inline]
-fn instance_any<F: Fn(TriRef, f32, f32) -> bool>(
-    inst: &Instance,
-    o: Vec3A,
-    d: Vec3A,
-    tmax: f32,
-    accept: &F,
-) -> bool {
-    let base = inst.geometry_base;
-    let acc = |t: TriRef, b1, b2| {
-        accept(
-            TriRef {
-                geometry: t.geometry + base,
-                ..t
-            },
-            b1,
-            b2,
-        )
-    };
-    if inst.identity {
-        inst.blas.any(o, d, tmax, &acc)
-    } else {
-        let lo = inst.object_from_world.transform_point3a(o);
-        let ld = inst.object_from_world.transform_vector3a(d);
-        inst.blas.any(lo, ld, tmax, &acc)
-    }
-}
-
 /// Iterates the set bits of a mask.
 #[inline]
 fn bits(mut m: FrameMask) -> impl Iterator<Item = usize> {
@@ -410,7 +342,7 @@ impl MultiFrameAccel {
                 return f32::INFINITY;
             }
             let bound = bits(m).map(|j| best[j]).fold(0.0f32, f32::max);
-            let Some((t, tri, b1, b2)) = instance_closest(&w.inst, o, d, bound, &accept) else {
+            let Some((t, tri, b1, b2)) = w.inst.closest_world(o, d, bound, &accept) else {
                 return f32::INFINITY;
             };
             let hit = Hit {
@@ -459,7 +391,7 @@ impl MultiFrameAccel {
                 tlas.ray_traverse_miss(oray(o, d, ray.tmax), |_, slot| {
                     let w = &self.dynamic[tlas.primitive_indices[slot] as usize];
                     let m = w.frames & frames & !occ;
-                    if m != 0 && instance_any(&w.inst, o, d, ray.tmax, &accept) {
+                    if m != 0 && w.inst.any_world(o, d, ray.tmax, &accept) {
                         occ |= m;
                     }
                     // A t below tmax ends the traversal: once every frame is occluded.
@@ -469,7 +401,7 @@ impl MultiFrameAccel {
             None => {
                 self.dynamic_candidates(o, d, ray.tmax, |w, _| {
                     let m = w.frames & frames;
-                    if m != 0 && instance_any(&w.inst, o, d, ray.tmax, &accept) {
+                    if m != 0 && w.inst.any_world(o, d, ray.tmax, &accept) {
                         occ |= m;
                     }
                     f32::INFINITY

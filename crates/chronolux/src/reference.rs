@@ -194,21 +194,8 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
             1 << 24
         );
     }
-    if !(args.fps > 0.0 && args.fps <= 1000.0) {
-        bail!("--fps {} out of range (0 < fps ≤ 1000)", args.fps);
-    }
-    if args.max_depth == Some(0) {
-        bail!("--max-depth 0 renders nothing (1 shows emitters only, 2 adds direct lighting)");
-    }
-    if let Some(t) = args.threads {
-        if t == 0 {
-            bail!("--threads must be at least 1");
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .context("cannot set up the thread pool")?;
-    }
+    crate::render::check_fps_and_depth(args.fps, args.max_depth)?;
+    crate::render::set_threads(args.threads)?;
     let input = scene_input::load(&args.scene)?;
     let last = last_frame(&input.desc, input.animation, args.fps);
     let frames = match &args.frames {

@@ -19,6 +19,31 @@ use std::time::Instant;
 const MAX_SIDE: u32 = 16384;
 const MAX_SPP: u32 = 1 << 20;
 
+/// Sets the size of the global thread pool (`None`: all cores).
+pub fn set_threads(threads: Option<usize>) -> Result<()> {
+    if let Some(t) = threads {
+        if t == 0 {
+            bail!("--threads must be at least 1");
+        }
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(t)
+            .build_global()
+            .context("cannot set up the thread pool")?;
+    }
+    Ok(())
+}
+
+/// Checks `--fps` and `--max-depth`, shared by every command that renders.
+pub fn check_fps_and_depth(fps: f32, max_depth: Option<u32>) -> Result<()> {
+    if !(fps > 0.0 && fps <= 1000.0) {
+        bail!("--fps {fps} out of range (0 < fps ≤ 1000)");
+    }
+    if max_depth == Some(0) {
+        bail!("--max-depth 0 renders nothing (1 shows emitters only, 2 adds direct lighting)");
+    }
+    Ok(())
+}
+
 /// Parses `A..B`, `A..=B` or `N` into a list of frames.
 pub fn parse_frames(s: &str) -> Result<Vec<u32>> {
     let s = s.trim();
@@ -84,24 +109,11 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.spp == 0 || args.spp > MAX_SPP {
         bail!("--spp {} out of range (1 to {MAX_SPP})", args.spp);
     }
-    if !(args.fps > 0.0 && args.fps <= 1000.0) {
-        bail!("--fps {} out of range (0 < fps ≤ 1000)", args.fps);
-    }
-    if args.max_depth == Some(0) {
-        bail!("--max-depth 0 renders nothing (1 shows emitters only, 2 adds direct lighting)");
-    }
+    check_fps_and_depth(args.fps, args.max_depth)?;
     if !args.exposure.is_finite() {
         bail!("--exposure must be a finite number of stops");
     }
-    if let Some(t) = args.threads {
-        if t == 0 {
-            bail!("--threads must be at least 1");
-        }
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t)
-            .build_global()
-            .context("cannot set up the thread pool")?;
-    }
+    set_threads(args.threads)?;
     // Everything that can be checked without the scene is checked before loading it.
     let requested_frames = args.frames.as_deref().map(parse_frames).transpose()?;
     let requested_resolution = args

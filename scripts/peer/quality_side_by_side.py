@@ -6,7 +6,7 @@
       --target-flip 0.14,0.10,0.08 --max-depth 8 --threads 2 --work OUT/quality \
       --out OUT/quality.json --report OUT/quality.md
 
-For spp = 1, 2, 4, ... (one level per process, so the two alternate under the same load):
+For spp = 1, 2, 4, ... (or --start-effort S: S, 2S, 4S, ...; one level per process, so the two alternate under the same load):
   ours:    chronolux bench quality SCENE --frames F --reference REFDIR --target-flip T
            --max-depth D --threads N --start-effort E --max-effort E --json
   Mitsuba: mitsuba_quality.py --scene SCENE --frames F --reference REFDIR --target-flip T
@@ -44,6 +44,9 @@ def main():
     ap.add_argument("--target-flip", default="0.14,0.10,0.08")
     ap.add_argument("--max-depth", type=int, default=8)
     ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--start-effort", type=int, default=1,
+                    help="first level (it doubles from there; e.g. 3 gives 3, 6, 12, ... between "
+                         "the default run's powers of two)")
     ap.add_argument("--max-effort", type=int, default=512)
     ap.add_argument("--work", required=True)
     ap.add_argument("--out", required=True)
@@ -55,7 +58,7 @@ def main():
               "--max-depth", str(a.max_depth), "--threads", str(a.threads), "--json"]
     sides = {"ours": {"levels": [], "done": False}, "mitsuba": {"levels": [], "done": False}}
     t_start = time.strftime("%Y-%m-%d %H:%M:%S %Z")
-    e = 1
+    e = a.start_effort
     while e <= a.max_effort and not all(s["done"] for s in sides.values()):
         lvl = ["--start-effort", str(e), "--max-effort", str(e)]
         for who in ["ours", "mitsuba"]:

@@ -10,6 +10,8 @@ For each renderer the levels of all runs are pooled and sorted by spp. Per targe
   interpolated  wall and CPU seconds at exactly the target, interpolated linearly in
                 log(seconds) vs log(FLIP) between the two pooled levels straddling it
                 (seconds are per-level measurements, so load noise carries into these)
+Pool wall seconds only over runs that saw the same load; CPU seconds pool more safely.
+Given one run, it interpolates within that run alone.
 """
 import argparse
 import json

@@ -13,10 +13,16 @@
 #   SPP=64 THREADS=2 MAX_DEPTH=8 RES=256
 #   RAYS=1000000     rays per set of the ray-casting comparison (keep >= 1M: below that
 #                    Mitsuba's per-call overhead dominates its timing)
-#   SKIP_PT=1 / SKIP_RAYS=1 / SKIP_OURS=1   skip a part
+#   BENCH_PT=1       also time ours with `chronolux bench pt` in the path-tracing comparison
+#   QUALITY_FRAMES=0..8 TARGETS=0.14,0.10,0.08 QUALITY_STARTS="1 3"
+#                    time-to-FLIP (issue 3): frames, target HDR-FLIPs, and the start of each
+#                    doubling grid (one interleaved run per start, then pooled); the
+#                    references REFS/mitsuba_fNN.exr must exist for these frames
+#   SKIP_PT=1 / SKIP_RAYS=1 / SKIP_OURS=1 / SKIP_QUALITY=1   skip a part
 #
 # Writes OUT_DIR/{machine.txt, pt.json, rays_ours_rN.json, rays_mitsuba_<set>_rN.json,
-# ours_rays.json, ours_pt.json}; every figure in BENCHMARKS.md comes from these files.
+# ours_rays.json, ours_pt.json, quality_startS.{json,md}, quality_merged.md}; every figure
+# in BENCHMARKS.md comes from these files.
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 PEER="$ROOT/scripts/peer"
@@ -63,7 +69,8 @@ BIN="${CARGO_TARGET_DIR:-$ROOT/target}/release/chronolux"
 if [ -z "${SKIP_PT:-}" ]; then
     "$PY" "$PEER/compare_pt.py" --chronolux "$BIN" --scene "$SCENE" --frames "$FRAMES" \
         --rounds "$ROUNDS" --spp "$SPP" --res "$RES" --max-depth "$MAX_DEPTH" \
-        --threads "$THREADS" --refs "$REFS" --work "$OUT/pt" --out "$OUT/pt.json" >/dev/null
+        --threads "$THREADS" --refs "$REFS" --work "$OUT/pt" --out "$OUT/pt.json" \
+        ${BENCH_PT:+--bench-pt} >/dev/null
     "$PY" - "$OUT/pt.json" <<'PYEOF'
 import json, sys
 d = json.load(open(sys.argv[1]))
@@ -112,5 +119,30 @@ if [ -z "${SKIP_OURS:-}" ]; then
         --threads "$THREADS" --json > "$OUT/ours_pt.json"
     "$BIN" bench pt "$SCENE" --spp "$SPP" --resolution 256x256 --max-depth "$MAX_DEPTH" \
         --frames 0 --threads "$THREADS" --rounds 3 --json > "$OUT/ours_pt_cornell.json"
+fi
+# 6. Time to FLIP (issue 3): bench quality vs mitsuba_quality.py, interleaved by level.
+if [ -z "${SKIP_QUALITY:-}" ]; then
+    QREFS="$OUT/quality_refs"
+    mkdir -p "$QREFS"
+    "$PY" - "$REFS" "$QREFS" "${QUALITY_FRAMES:-0..8}" <<'PYEOF'
+import os, sys
+refs, out, fr = sys.argv[1:4]
+a, b = fr.split("..=") if "..=" in fr else fr.split("..")
+hi = int(b) + 1 if "..=" in fr else int(b)
+for f in range(int(a), hi):
+    dst = os.path.join(out, f"frame_{f:04d}.exr")
+    if not os.path.exists(dst):
+        os.symlink(os.path.abspath(os.path.join(refs, f"mitsuba_f{f:02d}.exr")), dst)
+PYEOF
+    runs=()
+    for start in ${QUALITY_STARTS:-1 3}; do
+        "$PY" "$PEER/quality_side_by_side.py" --chronolux "$BIN" --scene "$SCENE" \
+            --frames "${QUALITY_FRAMES:-0..8}" --reference "$QREFS" \
+            --target-flip "${TARGETS:-0.14,0.10,0.08}" --max-depth "$MAX_DEPTH" --threads "$THREADS" \
+            --start-effort "$start" --work "$OUT/quality$start" \
+            --out "$OUT/quality_start$start.json" --report "$OUT/quality_start$start.md" >/dev/null
+        runs+=("$OUT/quality_start$start.json")
+    done
+    "$PY" "$PEER/quality_merge.py" "${runs[@]}" --md "$OUT/quality_merged.md"
 fi
 echo "results in $OUT" >&2

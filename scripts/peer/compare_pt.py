@@ -71,6 +71,9 @@ def main():
     ap.add_argument("--work", required=True)
     ap.add_argument("--flip", action="store_true", help="also compute HDR-FLIP (1-3 s per image)")
     ap.add_argument("--out", default=None, help="also write the JSON document here")
+    ap.add_argument("--bench-pt", action="store_true",
+                    help="also time ours with `chronolux bench pt` (render only, no I/O) right after "
+                         "each render; its seconds are scored with the render's relMSE (same settings)")
     a = ap.parse_args()
     frames = [int(f) for f in a.frames.split(",")]
     os.makedirs(a.work, exist_ok=True)
@@ -92,6 +95,16 @@ def main():
             ours = {"who": "chronolux", "round": r, "frame": f, "seconds": rec["wall_s"],
                     "process_s": proc_s, "process_cpu_s": proc_cpu_s, "loadavg1": os.getloadavg()[0],
                     **score(os.path.join(od, rec["file_exr"]), ref, a.flip)}
+            if a.bench_pt:
+                c0 = children_cpu_s()
+                bp = json.loads(run([a.chronolux, "bench", "pt", a.scene, "--frames", str(f),
+                                     "--spp", str(a.spp), "--resolution", f"{a.res}x{a.res}",
+                                     "--max-depth", str(a.max_depth), "--threads", str(a.threads),
+                                     "--rounds", "1", "--json"]))
+                ours["bench_pt_s"] = bp["frames"][0]["render_s_median"]
+                ours["bench_pt_process_cpu_s"] = children_cpu_s() - c0
+                ours["bench_pt_msamples_per_s"] = bp["frames"][0]["msamples_per_s"]
+                ours["bench_pt_mrays_per_s"] = bp["frames"][0]["mrays_per_s"]
             rows.append(ours)
             print(json.dumps(ours), file=sys.stderr, flush=True)
             # Mitsuba
@@ -120,6 +133,12 @@ def main():
             s[who]["efficiency_of_medians"] = 1.0 / (s[who]["seconds"] * s[who]["relmse"])
             if a.flip:
                 s[who]["hdr_flip"] = med(who, f, "hdr_flip")
+        if a.bench_pt:
+            eff = [1.0 / (x["bench_pt_s"] * x["relmse"]) for x in rows if x["who"] == "chronolux" and x["frame"] == f]
+            s["chronolux"]["bench_pt_s"] = med("chronolux", f, "bench_pt_s")
+            s["chronolux"]["bench_pt_efficiency_median"] = statistics.median(eff)
+        s["chronolux"]["process_cpu_s"] = med("chronolux", f, "process_cpu_s")
+        s["mitsuba"]["cpu_s"] = med("mitsuba", f, "cpu_s")
         c, m = s["chronolux"], s["mitsuba"]
         s["ratio_ours_over_mitsuba"] = {
             "seconds": c["seconds"] / m["seconds"],
@@ -131,7 +150,20 @@ def main():
                 (1 / (x["seconds"] * x["relmse"])) / (1 / (y["seconds"] * y["relmse"]))
                 for x in rows if x["who"] == "chronolux" and x["frame"] == f
                 for y in rows if y["who"] == "mitsuba" and y["frame"] == f and y["round"] == x["round"]],
+            # efficiency on CPU-seconds: ours' whole process (loading, EXR/PNG included) vs
+            # Mitsuba's timed render
+            "efficiency_cpu_per_round": [
+                (y["cpu_s"] * y["relmse"]) / (x["process_cpu_s"] * x["relmse"])
+                for x in rows if x["who"] == "chronolux" and x["frame"] == f
+                for y in rows if y["who"] == "mitsuba" and y["frame"] == f and y["round"] == x["round"]],
         }
+        if a.bench_pt:
+            s["ratio_ours_over_mitsuba"]["efficiency_bench_pt_per_round"] = [
+                (y["seconds"] * y["relmse"]) / (x["bench_pt_s"] * x["relmse"])
+                for x in rows if x["who"] == "chronolux" and x["frame"] == f
+                for y in rows if y["who"] == "mitsuba" and y["frame"] == f and y["round"] == x["round"]]
+            s["ratio_ours_over_mitsuba"]["efficiency_bench_pt_median"] = (
+                c["bench_pt_efficiency_median"] / m["efficiency_median"])
         summary[f"frame_{f}"] = s
     cpu = next((ln.split(":", 1)[1].strip() for ln in open("/proc/cpuinfo") if ln.startswith("model name")), "")
     doc = {"date": time.strftime("%Y-%m-%d %H:%M:%S %Z"), "cpu": cpu, "nproc": os.cpu_count(),

@@ -142,6 +142,12 @@ impl Dept {
                 break (ind, cau);
             };
             let a = assess_frame(&rule, &mesh, &elements, &photons, &ind, &cau, &si, &sc);
+            log::debug!(
+                "dept frame {frame}: {total} photons, {:.1} % of the power-weighted surface above the {} contrast threshold, {} photons predicted",
+                100.0 * a.fraction_above,
+                rule.weber,
+                a.predicted_photons
+            );
             match next_total(&rule, total, &a) {
                 Some(t) => total = t,
                 None => break (ind, cau),

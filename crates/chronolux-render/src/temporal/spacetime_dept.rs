@@ -334,6 +334,12 @@ impl SequenceRenderer for SpacetimeDept {
             };
             let cur = &self.history.back().expect("current frame").photons;
             let a = assess_frame(&rule, &mesh, &fe, cur, &ind, &cau, &si, &sc);
+            log::debug!(
+                "spacetime-dept frame {frame}: {total} photons, {:.1} % of the power-weighted surface above the {} contrast threshold, {} photons predicted",
+                100.0 * a.fraction_above,
+                rule.weber,
+                a.predicted_photons
+            );
             match next_total(&rule, total, &a) {
                 Some(t) => total = t,
                 None => break (ind, cau),

@@ -353,3 +353,60 @@ fn spacetime_dept_pools_frames_on_a_static_scene() {
     let (max, mean) = block_errors(&st_img.pixels, &reference, 32);
     assert!(max < 0.08 && mean < 0.015, "block {max}, mean {mean}");
 }
+
+/// The stopping rule: the photon count it picks grows as the Weber threshold tightens
+/// (σ ∝ 1/√N: halving the threshold needs about 4× the photons, within the batch
+/// granularity and the [total + batch, 2·total] step clamp), stays within [batch, cap],
+/// and the frame's solution then meets the criterion it was stopped on.
+#[test]
+fn stopping_rule_shoots_more_photons_for_a_tighter_threshold() {
+    use chronolux_render::dept::budget::AutoPhotons;
+    let scene = frame0(cornell_box(), 16, 16);
+    let solve = |weber: f32| {
+        let rule = AutoPhotons {
+            weber,
+            batch: 10_000,
+            max_photons: 2_000_000,
+            ..Default::default()
+        };
+        let d = Dept::new(DeptSettings {
+            spp: 1,
+            elements: 30.0,
+            auto: Some(rule),
+            ..DeptSettings::spatial()
+        });
+        d.solve(&scene, 0).photons.photons()
+    };
+    let (loose, tight) = (solve(0.04), solve(0.02));
+    assert!(
+        (10_000..=2_000_000).contains(&loose) && (10_000..=2_000_000).contains(&tight),
+        "{loose} {tight}"
+    );
+    let ratio = tight as f64 / loose as f64;
+    assert!(
+        (2.0..=8.0).contains(&ratio),
+        "halving the threshold: {loose} → {tight} photons (×{ratio:.2})"
+    );
+}
+
+/// `FrameScene::geometry_instance` names the instance that carries each geometry: moving
+/// the quad's node moves that instance's transform, and the element mesh follows it.
+#[test]
+fn geometry_instance_carries_the_moving_node() {
+    let desc = Arc::new(moving_quad());
+    let mut b = FrameBuilder::new(desc, Some(AnimationId(0)), CameraChoice::First, 8, 8).unwrap();
+    let (s0, s1) = (b.build(0.0), b.build(1.0));
+    assert_eq!(s0.geometry_instance.len(), s0.geometry.len());
+    let xf0 = chronolux_render::dept::element_map::geometry_transforms(&s0);
+    let xf1 = chronolux_render::dept::element_map::geometry_transforms(&s1);
+    let moved: Vec<f32> = xf0
+        .iter()
+        .zip(&xf1)
+        .map(|(a, b)| (b.translation - a.translation).x)
+        .collect();
+    assert!(
+        moved.iter().any(|d| (d - 2.0).abs() < 1e-4),
+        "no geometry moved by +2: {moved:?}"
+    );
+    assert!(moved.iter().any(|d| d.abs() < 1e-6), "the wall is static");
+}

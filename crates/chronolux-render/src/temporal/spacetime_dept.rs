@@ -11,15 +11,15 @@
 //!    frames (memory: O(elements × window)).
 //! 2. **Temporal window, per element side**: starting from frame t, earlier frames
 //!    t−1, t−2, … are added (ratio estimator Σ w_k Φ_k / (N Σ w_k A_k), Gaussian weight
-//!    w_k in the frame distance, σ = `temporal_sigma`) until the element has
-//!    `target_photons` photons, or until the **energy test** fails: frame k's irradiance
-//!    differs from the window's so far by more than `change_threshold` standard deviations
+//!    w_k in the frame distance, σ = `temporal_sigma`) until the element has enough
+//!    photons (at least `target_photons` and a standard error below `weber` (2 %) of its
+//!    total irradiance, direct included: the perceptual threshold of the stopping rule),
+//!    or until the **energy test** fails: frame k's irradiance differs from the window's so far by more than `change_threshold` standard deviations
 //!    of their difference (σ from Σφ², see `dept::reconstruct`). So static lighting pools
 //!    up to `window` frames and a change (a light switching on, an object arriving) cuts
 //!    the window at the change — the temporal blur the method is meant to avoid.
-//! 3. **Spatial completion**: elements that still have fewer than `target_photons`
-//!    photons are filtered with the spatial bilateral filter over neighbours' temporal
-//!    estimates (range kernel from the estimates' noise, relaxed to a plain Gaussian below
+//! 3. **Spatial completion**: elements that still do not have enough photons are
+//!    filtered with the spatial bilateral filter over neighbours' temporal estimates (range kernel from the estimates' noise, relaxed to a plain Gaussian below
 //!    `min_photons`); elements with enough photons keep their own estimate.
 //! 4. Vertex interpolation and the eye pass are those of `dept` (direct light per pixel).
 //!
@@ -32,11 +32,14 @@
 //! the first frames have only their own photons (plus spatial filtering) until the new
 //! lighting has accumulated.
 
+use crate::dept::budget::luminances;
 use crate::dept::budget::{AutoPhotons, PhotonCount, next_total};
 use crate::dept::element_map::{
     ElementAccumulators, ElementMesh, FrameElements, FramePhotons, deposit_more_photons,
 };
-use crate::dept::reconstruct::{ElementSolution, Neighbours, prior_sq, range_weight};
+use crate::dept::reconstruct::{
+    ElementSolution, Filter, Neighbours, filtered_irradiance_sigma, prior_sq, range_weight,
+};
 use crate::dept::{DeptSettings, assess_frame, render_view};
 use crate::integrator::RenderedFrame;
 use crate::sequence::SequenceRenderer;
@@ -62,14 +65,17 @@ pub struct SpacetimeSettings {
     pub max_specular_depth: u32,
     /// Past frames kept (longest temporal window = window + 1 frames). Default 8.
     pub window: u32,
-    /// Photons per element side after which no further frames or neighbours are pooled.
-    /// Default 400: a relative standard error of 1/√400 = 5 % of the element's indirect
-    /// estimate, i.e. ≤ 2 % luminance contrast where indirect light is at most 40 % of the
-    /// total — the stopping rule's threshold ([`crate::dept::budget`]). (64, the first
-    /// default, left 12.5 % noise on every element that reached it: with a few hundred
-    /// thousand photons per frame most elements did, got no spatial filtering, and the
-    /// method was noisier than the Gaussian baseline at equal photons.)
+    /// "Enough photons" for an element side, after which no further frames or neighbours
+    /// are pooled: at least this many photons **and** a standard error below `weber` times
+    /// the side's total irradiance (direct included, estimated from the frame's first-hit
+    /// photons as in [`crate::dept::budget`]). Default 64.
     pub target_photons: u32,
+    /// Luminance contrast (Weber fraction) below which an element's own noise is
+    /// invisible, so pooling stops. Default 0.02 (the stopping rule's threshold). A pure
+    /// count (the first version: 64 photons) left 12.5 % noise on every element that
+    /// reached it, which with a few hundred thousand photons per frame was most of them,
+    /// unfiltered: noisier than the Gaussian baseline at equal photons.
+    pub weber: f32,
     /// Energy test: standard deviations of difference that mean "the lighting changed".
     /// Default 3.
     pub change_threshold: f32,
@@ -94,7 +100,8 @@ impl Default for SpacetimeSettings {
             elements: 100.0,
             max_specular_depth: 8,
             window: 8,
-            target_photons: 400,
+            target_photons: 64,
+            weber: 0.02,
             change_threshold: 3.0,
             temporal_sigma: 4.0,
             radius: 2.5,
@@ -155,6 +162,14 @@ impl SpacetimeDept {
         }
     }
 
+    /// True when an element side with `count` photons, luminance irradiance `e`, standard
+    /// error `sigma` and direct irradiance `direct` needs no more photons.
+    #[inline]
+    fn enough(&self, count: u32, e: f32, sigma: f32, direct: f32) -> bool {
+        let s = &self.settings;
+        count >= s.target_photons && sigma <= s.weber * (e + direct).max(0.0)
+    }
+
     /// Temporal pooling of one field (indirect or caustic) over the history (newest
     /// last): returns pooled sums as accumulators plus the pooled areas. Frames may have
     /// different photon counts (stopping rule): each frame's sums are divided by its own
@@ -162,6 +177,7 @@ impl SpacetimeDept {
     fn pool(
         &self,
         field: impl Fn(&FramePhotons) -> &ElementAccumulators,
+        direct: &[f32],
     ) -> (ElementAccumulators, Vec<f32>) {
         let s = &self.settings;
         let cur = self.history.back().expect("current frame in history");
@@ -181,7 +197,7 @@ impl SpacetimeDept {
                 acc.flux_sq[slot] * inv_n * inv_n,
             );
             for past in self.history.iter().rev().skip(1) {
-                if cnt >= s.target_photons || a <= 0.0 {
+                if a <= 0.0 || self.enough(cnt, luminance(phi) / a, sq.sqrt() / a, direct[slot]) {
                     break;
                 }
                 let p = field(&past.photons);
@@ -217,6 +233,7 @@ impl SpacetimeDept {
     /// `target_photons`, their own estimate otherwise. Returns irradiance per slot.
     /// Also returns the standard error of each luminance estimate, with `prior` (per unit
     /// photon, see [`crate::dept::reconstruct::filter_with_sigma`]) added to every Σφ².
+    #[allow(clippy::too_many_arguments)]
     fn complete(
         &self,
         pooled: &ElementAccumulators,
@@ -224,6 +241,7 @@ impl SpacetimeDept {
         fe: &FrameElements,
         nb: &Neighbours,
         prior: f32,
+        direct: &[f32],
     ) -> (Vec<Rgb>, Vec<f32>) {
         let s = &self.settings;
         let inv_n = 1.0 / pooled.photons.max(1) as f32;
@@ -249,7 +267,8 @@ impl SpacetimeDept {
             for e in range {
                 for side in 0..2 {
                     let se = 2 * e + side;
-                    if pooled.count[se] >= s.target_photons {
+                    if area[se] > 0.0 && self.enough(pooled.count[se], est(se), sig(se), direct[se])
+                    {
                         out.push(if area[se] > 0.0 {
                             (
                                 pooled.flux[se] * (inv_n / area[se]),
@@ -330,10 +349,17 @@ impl SequenceRenderer for SpacetimeDept {
             let inv_n = 1.0 / cur.photons().max(1) as f32;
             let prior_i = prior_sq(&cur.indirect) * inv_n * inv_n;
             let prior_c = prior_sq(&cur.caustic) * inv_n * inv_n;
-            let (ind, ind_area) = self.pool(|p| &p.indirect);
-            let (cau, cau_area) = self.pool(|p| &p.caustic);
-            let (ind, si) = self.complete(&ind, &ind_area, &fe, &nb, prior_i);
-            let (cau, sc) = self.complete(&cau, &cau_area, &fe, &nb, prior_c);
+            let (direct, _) = filtered_irradiance_sigma(
+                &mesh,
+                &cur.direct,
+                &fe,
+                Filter::Gaussian { radius: 2.5 },
+            );
+            let direct = luminances(&direct);
+            let (ind, ind_area) = self.pool(|p| &p.indirect, &direct);
+            let (cau, cau_area) = self.pool(|p| &p.caustic, &direct);
+            let (ind, si) = self.complete(&ind, &ind_area, &fe, &nb, prior_i, &direct);
+            let (cau, sc) = self.complete(&cau, &cau_area, &fe, &nb, prior_c, &direct);
             let Some(rule) = s.auto else {
                 break (ind, cau);
             };

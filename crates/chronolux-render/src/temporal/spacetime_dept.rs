@@ -14,12 +14,14 @@
 //!    w_k in the frame distance, σ = `temporal_sigma`) until the element has enough
 //!    photons (at least `target_photons` and a standard error below `weber` (2 %) of its
 //!    total irradiance, direct included: the perceptual threshold of the stopping rule),
-//!    or until the **energy test** fails: frame k's irradiance differs from the window's so far by more than `change_threshold` standard deviations
-//!    of their difference (σ from Σφ², see `dept::reconstruct`). So static lighting pools
+//!    or until the **energy test** fails: frame k's irradiance differs from the
+//!    window's so far by more than `change_threshold` standard deviations of their
+//!    difference (σ from Σφ², see `dept::reconstruct`). So static lighting pools
 //!    up to `window` frames and a change (a light switching on, an object arriving) cuts
 //!    the window at the change — the temporal blur the method is meant to avoid.
 //! 3. **Spatial completion**: elements that still do not have enough photons are
-//!    filtered with the spatial bilateral filter over neighbours' temporal estimates (range kernel from the estimates' noise, relaxed to a plain Gaussian below
+//!    filtered with the spatial bilateral filter over neighbours' temporal estimates
+//!    (range kernel from the estimates' noise, relaxed to a plain Gaussian below
 //!    `min_photons`); elements with enough photons keep their own estimate.
 //! 4. Vertex interpolation and the eye pass are those of `dept` (direct light per pixel).
 //!

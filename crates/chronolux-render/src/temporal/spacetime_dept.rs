@@ -178,7 +178,7 @@ impl SpacetimeDept {
     /// count, so the returned accumulators are per unit photon (`photons = 1`).
     fn pool(
         &self,
-        field: impl Fn(&FramePhotons) -> &ElementAccumulators,
+        field: impl Fn(&FramePhotons) -> &ElementAccumulators + Sync,
         direct: &[f32],
     ) -> (ElementAccumulators, Vec<f32>) {
         let s = &self.settings;
@@ -186,11 +186,8 @@ impl SpacetimeDept {
         let acc = field(&cur.photons);
         let n_slots = acc.flux.len();
         let inv_n = 1.0 / acc.photons.max(1) as f32;
-        let mut out = ElementAccumulators::new(n_slots / 2);
-        out.photons = 1;
-        let mut area = vec![0.0f32; n_slots];
         let inv2s2 = 1.0 / (2.0 * s.temporal_sigma.max(1e-3).powi(2));
-        for (slot, area_slot) in area.iter_mut().enumerate() {
+        let pool_slot = |slot: usize| {
             let a0 = cur.area[slot / 2];
             let (mut phi, mut a, mut cnt, mut sq) = (
                 acc.flux[slot] * inv_n,
@@ -223,10 +220,18 @@ impl SpacetimeDept {
                 cnt += p.count[slot];
                 sq += p.flux_sq[slot] * (w * inv_k) * (w * inv_k);
             }
+            (phi, cnt, sq, a)
+        };
+        // Per-slot work is independent: parallel chunks, concatenated in order.
+        let rows = parallel::map_chunks(n_slots, 4096, |r| r.map(pool_slot).collect::<Vec<_>>());
+        let mut out = ElementAccumulators::new(n_slots / 2);
+        out.photons = 1;
+        let mut area = Vec::with_capacity(n_slots);
+        for (slot, (phi, cnt, sq, a)) in rows.into_iter().flatten().enumerate() {
             out.flux[slot] = phi;
             out.count[slot] = cnt;
             out.flux_sq[slot] = sq;
-            *area_slot = a;
+            area.push(a);
         }
         (out, area)
     }

@@ -58,7 +58,11 @@ fn block_errors(img: &[glam::Vec3], reference: &[f64], w: usize) -> (f64, f64) {
 /// back-side light trapped between lamp and ceiling is averaged into the visible ceiling
 /// around it); at 100 the error there drops to ~1 % while the remaining block errors
 /// (≤ 5 %, at the same blocks for 25, 50 and 100 elements, and with 1e5 or 4e6 photons) do
-/// not depend on the resolution or the photon count. So at 100 elements the test allows
+/// not depend on the resolution or the photon count. They are the *reference's* noise
+/// (`diagnose_cornell_block_errors`): rare bright paths through the 1 % gap that the
+/// two-sided lamp lights make two 1024-spp path-traced images with different seeds differ
+/// by up to 8 % per block, in the same blocks; with a one-sided lamp dept and the path
+/// tracer agree within 0.5 % everywhere. So at 100 elements the test allows
 /// 8 % per 8×8 block and 1.5 % on the image mean (measured: 4.8 % and 0.35 %), and checks
 /// that the coarse mesh is at least twice as wrong (the bias does shrink with h).
 /// Photon noise at 1e6 photons and the reference's noise (1024 spp) are below 0.5 % per
@@ -409,4 +413,54 @@ fn geometry_instance_carries_the_moving_node() {
         "no geometry moved by +2: {moved:?}"
     );
     assert!(moved.iter().any(|d| d.abs() < 1e-6), "the wall is static");
+}
+
+/// Diagnostic for the unexplained ≤ 5 % block errors of `dept` on the Cornell box (run
+/// with `--ignored --nocapture`): per-block relative error against the path tracer with
+/// the lamp two-sided (as staged: its back side lights the 1 % gap under the ceiling) and
+/// one-sided, and between two path-traced images with different seeds.
+#[test]
+#[ignore]
+fn diagnose_cornell_block_errors() {
+    for two_sided in [true, false] {
+        let mut desc = cornell_box();
+        for m in desc.materials.iter_mut() {
+            if m.emissive != Rgb::ZERO {
+                m.double_sided = two_sided;
+            }
+        }
+        let scene = frame0(desc, 32, 32);
+        let pt = PathTracer::new(PathSettings {
+            spp: 1024,
+            ..Default::default()
+        });
+        let reference = blocks(&pt.render(&scene, 0, &|_| {}).pixels, 32, 8);
+        let d = Dept::new(DeptSettings {
+            spp: 256,
+            elements: 100.0,
+            photons: 1_000_000,
+            ..Default::default()
+        });
+        let b = blocks(&d.render(&scene, 0, &|_| {}).pixels, 32, 8);
+        // A second, independent path-traced image (another seed): how far apart two
+        // 1024-spp references are.
+        let pt2 = PathTracer::new(PathSettings {
+            spp: 1024,
+            seed: 7,
+            ..Default::default()
+        });
+        let b2 = blocks(&pt2.render(&scene, 0, &|_| {}).pixels, 32, 8);
+        for (name, img) in [("dept vs pt", &b), ("pt seed 7 vs pt seed 0", &b2)] {
+            println!("two-sided lamp: {two_sided}: {name} (rows top to bottom, % error)");
+            for row in 0..4 {
+                let r: Vec<String> = (0..4)
+                    .map(|c| {
+                        let k = row * 4 + c;
+                        format!("{:+6.1}", 100.0 * (img[k] - reference[k]) / reference[k])
+                    })
+                    .collect();
+                println!("  {}", r.join(" "));
+            }
+        }
+    }
 }

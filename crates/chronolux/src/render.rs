@@ -140,7 +140,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
         None if args.scene.scene.is_none() => (256, 256),
         None => default_resolution(&input.desc, &input.camera),
     };
-    let sink = FrameSink::create(&args.output)?;
     let photons: Option<PhotonCount> = match &args.photons {
         None => None,
         Some(_) if !args.method.contains("dept") => {
@@ -148,6 +147,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
         Some(p) => Some(p.parse().map_err(anyhow::Error::msg)?),
     };
+    let sink = FrameSink::create(&args.output)?;
     let config = match args.method.as_str() {
         "path" => TechniqueConfig::Path(PathSettings {
             spp: args.spp,

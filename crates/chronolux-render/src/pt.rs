@@ -2,10 +2,10 @@
 //! (power heuristic), Russian roulette, Owen-scrambled Sobol samples per pixel.
 
 use crate::integrator::{Integrator, RadianceEstimator, RenderedFrame, render_camera_rays};
+use crate::kernels::direct::{NeeWeight, next_event};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
-use chronolux_core::geometry::{Ray, spawn_ray, spawn_ray_to};
-use chronolux_core::light::Light;
+use chronolux_core::geometry::{Ray, spawn_ray};
 use chronolux_core::material;
 use chronolux_core::math::Vec3;
 use chronolux_core::sampling::power_heuristic;
@@ -54,24 +54,6 @@ impl PathTracer {
     pub fn new(settings: PathSettings) -> Self {
         PathTracer { settings }
     }
-}
-
-/// Radiance emitted by a light towards a sampled point, including emission textures.
-fn light_radiance(
-    scene: &FrameScene,
-    light: &Light,
-    li: Rgb,
-    bary: chronolux_core::math::Vec2,
-) -> Rgb {
-    if let Light::Triangle { tri, instance, .. } = light {
-        let g = &scene.geometry[tri.geometry as usize];
-        let m = &scene.materials[g.material as usize];
-        if m.emissive_texture.is_some() {
-            let si = scene.surface_at(*tri, *instance, bary.x, bary.y, None);
-            return material::emission_at(m, &scene.textures, &si.shading);
-        }
-    }
-    li
 }
 
 impl RadianceEstimator for PathTracer {
@@ -140,27 +122,18 @@ impl RadianceEstimator for PathTracer {
             // used, so each bounce's dimensions stay aligned across samples.
             let u_light = sampler.next_1d();
             let u_lp = sampler.next_2d();
-            if bsdf.has_non_delta()
-                && let Some((li_idx, pmf, _)) = scene.light_sampler.sample(u_light)
-            {
-                let light = &scene.lights[li_idx];
-                if let Some(ls) = light.sample_li(si.p, u_lp, scene.scene_radius) {
-                    let f =
-                        bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.n).abs();
-                    if f != Rgb::ZERO {
-                        let shadow = spawn_ray_to(si.p, si.ng, ls.p, ls.n);
-                        stats.shadow_rays += 1;
-                        if !scene.occluded(&shadow) {
-                            let le = light_radiance(scene, light, ls.li, ls.bary);
-                            let w = if ls.is_delta {
-                                1.0
-                            } else {
-                                power_heuristic(1.0, pmf * ls.pdf, 1.0, bsdf.pdf(wo, ls.wi))
-                            };
-                            l += beta * f * le * (w / (pmf * ls.pdf));
-                        }
-                    }
-                }
+            if bsdf.has_non_delta() {
+                l += next_event(
+                    scene,
+                    &si,
+                    wo,
+                    &bsdf,
+                    beta,
+                    u_light,
+                    u_lp,
+                    NeeWeight::Mis,
+                    stats,
+                );
             }
 
             // Continue the path by sampling the BSDF.

@@ -1,7 +1,7 @@
 //! The one place where technique names map to types.
 
 use crate::bdpt::{Bdpt, BdptSettings};
-use crate::dept::{Dept, DeptSettings};
+use crate::dept::{Dept, DeptSequence, DeptSettings};
 use crate::pt::{PathSettings, PathTracer};
 use crate::sequence::{FrameByFrame, SequenceRenderer};
 use crate::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
@@ -57,18 +57,13 @@ impl TechniqueConfig {
                 integrator: Bdpt::new(s.clone()),
                 name: "bdpt",
             }),
-            TechniqueConfig::Dept(s) => Box::new(FrameByFrame {
-                integrator: Dept::new(s.clone()),
-                name: "dept",
-            }),
-            TechniqueConfig::DeptSpatial(s) => Box::new(FrameByFrame {
-                integrator: Dept::new(s.clone()),
-                name: "dept-spatial",
-            }),
-            TechniqueConfig::DeptBilateral(s) => Box::new(FrameByFrame {
-                integrator: Dept::new(s.clone()),
-                name: "dept-bilateral",
-            }),
+            TechniqueConfig::Dept(s) => Box::new(DeptSequence::new(Dept::new(s.clone()), "dept")),
+            TechniqueConfig::DeptSpatial(s) => {
+                Box::new(DeptSequence::new(Dept::new(s.clone()), "dept-spatial"))
+            }
+            TechniqueConfig::DeptBilateral(s) => {
+                Box::new(DeptSequence::new(Dept::new(s.clone()), "dept-bilateral"))
+            }
             TechniqueConfig::SpacetimeDept(s) => Box::new(SpacetimeDept::new(s.clone())),
         }
     }

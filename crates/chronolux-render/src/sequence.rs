@@ -15,6 +15,11 @@ pub trait SequenceRenderer {
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame;
+
+    /// Photons emitted for the frame last rendered (photon methods; `None` otherwise).
+    fn photons_last_frame(&self) -> Option<u64> {
+        None
+    }
 }
 
 /// Every frame rendered from scratch by a single-frame integrator.

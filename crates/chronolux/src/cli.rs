@@ -88,6 +88,14 @@ pub struct RenderArgs {
     /// per-element temporal window with a bilateral filter.
     #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept"])]
     pub method: String,
+    /// Photons per frame of the photon methods (`dept`, `dept-spatial`, `dept-bilateral`;
+    /// for `spacetime-dept` the per-frame budget, before pooling over frames): a count
+    /// (e.g. 250000), or `auto` for the stopping rule, which shoots batches until the
+    /// reconstruction's noise is below a 2 % luminance contrast on all but 5 % of the
+    /// (power-weighted) surface, at most 4 million. Default: 500000 (`dept*`), 100000
+    /// (`spacetime-dept`). run.json records the photons of every frame.
+    #[arg(long, value_name = "N|auto")]
+    pub photons: Option<String>,
     /// Seed of every random sequence; the same seed gives bit-identical images.
     #[arg(long, default_value_t = 0, value_name = "S")]
     pub seed: u64,

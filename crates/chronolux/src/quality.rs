@@ -1,8 +1,8 @@
 //! `chronolux bench quality`: the equal-quality benchmark every temporal technique's
 //! speed-up is quoted from.
 //!
-//! For a method (and its baseline), the effort (samples per pixel; photons for photon
-//! methods) is doubled from `--start-effort` until the sequence reaches each target error
+//! For a method (and its baseline), the effort (samples per pixel; thousands of photons
+//! per frame for the photon methods) is doubled from `--start-effort` until the sequence reaches each target error
 //! against converged references (HDR-ꟻLIP, mean over frames by default, or the worst
 //! frame with `--criterion max`). Each effort level is a complete, independent render of
 //! every frame, timed in wall-clock and CPU seconds (frame construction included, FLIP
@@ -18,8 +18,10 @@ use anyhow::{Context, Result, bail};
 use chronolux_core::metrics::{self, flip};
 use chronolux_core::scene::frame::FrameBuilder;
 use chronolux_io::image::read_exr;
+use chronolux_render::dept::DeptSettings;
 use chronolux_render::pt::PathSettings;
 use chronolux_render::registry::TechniqueConfig;
+use chronolux_render::temporal::spacetime_dept::SpacetimeSettings;
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -49,7 +51,8 @@ pub struct QualityArgs {
     /// Which frames must reach the target: `mean` (the mean over frames) or `max` (every frame).
     #[arg(long, default_value = "mean", value_parser = ["mean", "max"])]
     pub criterion: String,
-    /// First effort level (spp) tried; it doubles from there.
+    /// First effort level tried (spp; thousands of photons per frame for photon methods);
+    /// it doubles from there.
     #[arg(long, default_value_t = 1, value_name = "N")]
     pub start_effort: u32,
     /// Largest effort level tried; a target not met by then is reported as not reached.
@@ -127,7 +130,8 @@ fn cpu_seconds() -> Option<f64> {
     Some((u + k) / 100.0)
 }
 
-/// The technique of `method` at `effort`.
+/// The technique of `method` at `effort`: samples per pixel for `path`, thousands of
+/// photons per frame for the photon methods.
 pub fn config_for(
     method: &str,
     effort: u32,
@@ -141,8 +145,32 @@ pub fn config_for(
             rr_depth: 5,
             seed,
         }),
+        // Photon methods: effort = thousands of photons per frame (the per-frame budget
+        // for spacetime-dept); camera samples stay at the method's default.
+        "dept" | "dept-spatial" | "dept-bilateral" => {
+            let base = match method {
+                "dept" => DeptSettings::default(),
+                "dept-spatial" => DeptSettings::spatial(),
+                _ => DeptSettings::bilateral(),
+            };
+            let s = DeptSettings {
+                photons: effort as u64 * 1000,
+                seed,
+                ..base
+            };
+            match method {
+                "dept" => TechniqueConfig::Dept(s),
+                "dept-spatial" => TechniqueConfig::DeptSpatial(s),
+                _ => TechniqueConfig::DeptBilateral(s),
+            }
+        }
+        "spacetime-dept" => TechniqueConfig::SpacetimeDept(SpacetimeSettings {
+            photons: effort as u64 * 1000,
+            seed,
+            ..Default::default()
+        }),
         m => bail!(
-            "bench quality does not know how to scale the effort of method '{m}' (known: path)"
+            "bench quality does not know how to scale the effort of method '{m}' (known: path, dept, dept-spatial, dept-bilateral, spacetime-dept)"
         ),
     })
 }

@@ -8,6 +8,7 @@ use chronolux_core::scene::desc::{Projection, SceneDesc};
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
 use chronolux_io::image::Image;
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
+use chronolux_render::dept::budget::PhotonCount;
 use chronolux_render::pt::PathSettings;
 use chronolux_render::registry::TechniqueConfig;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -151,6 +152,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
         None if args.scene.scene.is_none() => (256, 256),
         None => default_resolution(&input.desc, &input.camera),
     };
+    let photons: Option<PhotonCount> = match &args.photons {
+        None => None,
+        Some(_) if !args.method.contains("dept") => {
+            bail!("--photons applies to the photon methods (dept*, spacetime-dept) only")
+        }
+        Some(p) => Some(p.parse().map_err(anyhow::Error::msg)?),
+    };
     let sink = FrameSink::create(&args.output)?;
     let config = match args.method.as_str() {
         "path" => TechniqueConfig::Path(PathSettings {
@@ -165,27 +173,37 @@ pub fn run(args: RenderArgs) -> Result<()> {
             seed: args.seed,
             ..Default::default()
         }),
-        "dept" => TechniqueConfig::Dept(chronolux_render::dept::DeptSettings {
-            spp: args.spp,
-            seed: args.seed,
-            ..Default::default()
-        }),
-        "dept-spatial" => TechniqueConfig::DeptSpatial(chronolux_render::dept::DeptSettings {
-            spp: args.spp,
-            seed: args.seed,
-            ..chronolux_render::dept::DeptSettings::spatial()
-        }),
-        "dept-bilateral" => TechniqueConfig::DeptBilateral(chronolux_render::dept::DeptSettings {
-            spp: args.spp,
-            seed: args.seed,
-            ..chronolux_render::dept::DeptSettings::bilateral()
-        }),
+        "dept" => TechniqueConfig::Dept(
+            chronolux_render::dept::DeptSettings {
+                spp: args.spp,
+                seed: args.seed,
+                ..Default::default()
+            }
+            .with_photons(photons),
+        ),
+        "dept-spatial" => TechniqueConfig::DeptSpatial(
+            chronolux_render::dept::DeptSettings {
+                spp: args.spp,
+                seed: args.seed,
+                ..chronolux_render::dept::DeptSettings::spatial()
+            }
+            .with_photons(photons),
+        ),
+        "dept-bilateral" => TechniqueConfig::DeptBilateral(
+            chronolux_render::dept::DeptSettings {
+                spp: args.spp,
+                seed: args.seed,
+                ..chronolux_render::dept::DeptSettings::bilateral()
+            }
+            .with_photons(photons),
+        ),
         "spacetime-dept" => TechniqueConfig::SpacetimeDept(
             chronolux_render::temporal::spacetime_dept::SpacetimeSettings {
                 spp: args.spp,
                 seed: args.seed,
                 ..Default::default()
-            },
+            }
+            .with_photons(photons),
         ),
         m => bail!("unknown --method '{m}'"),
     };
@@ -294,6 +312,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     "shadow_rays": out.stats.shadow_rays,
                     "samples": out.stats.samples,
                     "invalid_samples": out.invalid_samples,
+                    "photons": renderer.photons_last_frame(),
                     "build": builder.last_build,
                 }),
             );

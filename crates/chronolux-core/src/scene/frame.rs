@@ -86,6 +86,11 @@ pub struct FrameScene {
     pub camera: Camera,
     pub bounds: Bounds3,
     pub scene_radius: f32,
+    /// Index in `accel.instances()` of the instance that carries each geometry (the
+    /// static instance for static geometry, the node's instance for rigid and deformed
+    /// geometry). Its `world_from_object` maps the geometry's vertex data to world space
+    /// (identity for `world_space` data).
+    pub geometry_instance: Vec<u32>,
     /// Per-geometry: material is alpha tested.
     alpha_tested: Vec<bool>,
 }
@@ -500,6 +505,7 @@ impl FrameBuilder {
             instances.push(Instance::new(blas.clone(), m).with_geometry_base(*base));
         }
         // Deformed nodes: world-space data and a fresh BLAS per node.
+        let mut instance_of = vec![0u32; self.slots.len()];
         for (_, range) in self.node_groups() {
             let (gid, n_prims) = (range.start, range.len());
             if self.slots[gid].class == Class::Deformed {
@@ -513,6 +519,7 @@ impl FrameBuilder {
                 }
                 stats.blas_rebuilt += 1;
                 stats.triangles_rebuilt += items.len() as u64;
+                instance_of[range.clone()].fill(instances.len() as u32);
                 instances.push(
                     Instance::new(Arc::new(Blas::build(&items, filter)), Affine3A::IDENTITY)
                         .with_geometry_base(gid as u32),
@@ -520,9 +527,9 @@ impl FrameBuilder {
             }
         }
         // Instance index of each rigid geometry (for world-space light triangles): rigid
-        // instances follow the static one, in `self.rigid` order.
+        // instances follow the static one, in `self.rigid` order. (Static geometry: the
+        // static instance, 0; deformed geometry: set above.)
         let first_rigid = self.static_blas.is_some() as u32;
-        let mut instance_of = vec![0u32; self.slots.len()];
         for (k, (node, _, base)) in self.rigid.iter().enumerate() {
             for (g, s) in self.slots.iter().enumerate().skip(*base as usize) {
                 if s.node != *node {
@@ -628,6 +635,7 @@ impl FrameBuilder {
             camera,
             bounds,
             scene_radius: radius,
+            geometry_instance: instance_of,
             alpha_tested: self.alpha_tested.clone(),
         }
     }

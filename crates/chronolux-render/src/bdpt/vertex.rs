@@ -15,8 +15,7 @@ use chronolux_core::bsdf::{Bsdf, TransportMode};
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::spawn_ray_to;
 use chronolux_core::light::Light;
-use chronolux_core::material;
-use chronolux_core::math::{Vec2, Vec3};
+use chronolux_core::math::Vec3;
 use chronolux_core::scene::desc::Projection;
 use chronolux_core::scene::frame::{FrameScene, SurfaceInteraction};
 use chronolux_core::stats::Stats;
@@ -326,48 +325,9 @@ pub fn g(scene: &FrameScene, v0: &Vertex, v1: &Vertex, stats: &mut Stats) -> f32
     }
 }
 
-/// Emitted radiance of a light at a point of it: the textured emission of triangle lights
-/// (barycentrics recovered from `p`), the light's own value otherwise.
-pub fn light_emission(scene: &FrameScene, light: &Light, le: Rgb, p: Vec3) -> Rgb {
-    if let Light::Triangle {
-        p0,
-        e1,
-        e2,
-        tri,
-        instance,
-        ..
-    } = light
-    {
-        let g = &scene.geometry[tri.geometry as usize];
-        let m = &scene.materials[g.material as usize];
-        if m.emissive_texture.is_some() {
-            // Least-squares barycentrics of p in the triangle (p0, e1, e2).
-            let d = p - *p0;
-            let (a, b, c) = (e1.dot(*e1), e1.dot(*e2), e2.dot(*e2));
-            let (r1, r2) = (d.dot(*e1), d.dot(*e2));
-            let det = a * c - b * b;
-            if det <= 0.0 {
-                return le;
-            }
-            let b1 = (c * r1 - b * r2) / det;
-            let b2 = (a * r2 - b * r1) / det;
-            let (b1, b2) = (b1.clamp(0.0, 1.0), b2.clamp(0.0, 1.0 - b1.clamp(0.0, 1.0)));
-            let si = scene.surface_at(*tri, *instance, b1, b2, None);
-            return material::emission_at(m, &scene.textures, &si.shading);
-        }
-    }
-    le
-}
-
-/// Emitted radiance of a light sampled by `sample_li` at barycentrics `bary`.
-pub fn light_emission_bary(scene: &FrameScene, light: &Light, le: Rgb, bary: Vec2) -> Rgb {
-    if let Light::Triangle { tri, instance, .. } = light {
-        let g = &scene.geometry[tri.geometry as usize];
-        let m = &scene.materials[g.material as usize];
-        if m.emissive_texture.is_some() {
-            let si = scene.surface_at(*tri, *instance, bary.x, bary.y, None);
-            return material::emission_at(m, &scene.textures, &si.shading);
-        }
-    }
-    le
-}
+/// Emitted radiance of a light sampled by `sample_li` at barycentrics `bary` (the shared
+/// [`crate::kernels::direct::light_radiance`]).
+pub use crate::kernels::direct::light_radiance as light_emission_bary;
+/// Emitted radiance of a light at a point of it (the shared
+/// [`crate::kernels::direct::light_radiance_at`]).
+pub use crate::kernels::direct::light_radiance_at as light_emission;

@@ -32,27 +32,20 @@ use std::collections::HashMap;
 /// Largest subdivision of one triangle (k² = 4096 elements).
 pub const MAX_K: u32 = 64;
 
-/// World transform of every geometry's vertex data (identity for world-space data).
-///
-/// `FrameScene` does not store which instance carries a geometry; the frame builder places
-/// every rigid node as one instance whose `geometry_base` is the node's first geometry id,
-/// after the static instance (base 0), so the last instance with that base is the one.
+/// World transform of every geometry's vertex data (identity for world-space data), from
+/// the instance that carries it ([`FrameScene::geometry_instance`]).
 pub fn geometry_transforms(scene: &FrameScene) -> Vec<Affine3A> {
     let inst = scene.accel.instances();
-    let geo = &scene.geometry;
-    let mut first = 0usize;
-    (0..geo.len())
-        .map(|gid| {
-            if gid > 0 && geo[gid - 1].node != geo[gid].node {
-                first = gid;
+    scene
+        .geometry
+        .iter()
+        .zip(&scene.geometry_instance)
+        .map(|(g, &i)| {
+            if g.world_space {
+                Affine3A::IDENTITY
+            } else {
+                inst[i as usize].world_from_object
             }
-            if geo[gid].world_space {
-                return Affine3A::IDENTITY;
-            }
-            inst.iter()
-                .rev()
-                .find(|i| i.geometry_base == first as u32)
-                .map_or(Affine3A::IDENTITY, |i| i.world_from_object)
         })
         .collect()
 }
@@ -356,13 +349,32 @@ impl ElementAccumulators {
 }
 
 /// The photons of one frame on the element mesh: indirect (at least one bounce, not a
-/// pure specular chain) and caustic (light → specular⁺ → diffuse) kept apart; photons
-/// straight from the lights are not stored (direct light is computed per pixel).
+/// pure specular chain) and caustic (light → specular⁺ → diffuse) kept apart. Photons
+/// straight from the lights go to `direct`, which only the stopping rule reads (for its
+/// contrast threshold, [`super::budget`]): direct light is rendered per pixel.
 #[derive(Clone, Debug)]
 pub struct FramePhotons {
     pub indirect: ElementAccumulators,
     pub caustic: ElementAccumulators,
+    pub direct: ElementAccumulators,
     pub stats: PhotonStats,
+}
+
+impl FramePhotons {
+    /// Empty sums for `elements` elements.
+    pub fn new(elements: usize) -> Self {
+        FramePhotons {
+            indirect: ElementAccumulators::new(elements),
+            caustic: ElementAccumulators::new(elements),
+            direct: ElementAccumulators::new(elements),
+            stats: PhotonStats::default(),
+        }
+    }
+
+    /// Photons emitted for these sums.
+    pub fn photons(&self) -> u64 {
+        self.indirect.photons
+    }
 }
 
 /// Photons traced per batch (bounds the memory of the in-order deposit lists).
@@ -376,36 +388,48 @@ pub fn deposit_photons(
     indices: std::ops::Range<u64>,
     seed: u64,
 ) -> FramePhotons {
-    let n = mesh.element_count();
-    let mut out = FramePhotons {
-        indirect: ElementAccumulators::new(n),
-        caustic: ElementAccumulators::new(n),
-        stats: PhotonStats::default(),
-    };
+    let mut out = FramePhotons::new(mesh.element_count());
+    deposit_more_photons(scene, mesh, indices, seed, &mut out);
+    out
+}
+
+/// Adds photons `indices` to `out` (the photon total grows by their number), in
+/// photon-index order: depositing `a..b` then `b..c` gives exactly `a..c`'s sums.
+pub fn deposit_more_photons(
+    scene: &FrameScene,
+    mesh: &ElementMesh,
+    indices: std::ops::Range<u64>,
+    seed: u64,
+    out: &mut FramePhotons,
+) {
     let photons = indices.end.saturating_sub(indices.start);
-    out.indirect.photons = photons;
-    out.caustic.photons = photons;
+    out.indirect.photons += photons;
+    out.caustic.photons += photons;
+    out.direct.photons += photons;
     let mut lo = indices.start;
     while lo < indices.end {
         let hi = (lo + BATCH).min(indices.end);
         let (hits, stats) = trace_photons(scene, lo..hi, seed, |h: &PhotonHit| {
-            if !h.is_indirect() {
-                return None;
-            }
             let e = mesh.locate(h.tri, h.b1, h.b2).element;
-            Some((slot(e, h.wi.dot(h.ng) >= 0.0) as u32, h.power, h.caustic))
-        });
-        for (s, p, c) in hits {
-            if c {
-                out.caustic.deposit(s as usize, p);
+            let kind = if !h.is_indirect() {
+                0u8
+            } else if h.caustic {
+                2
             } else {
-                out.indirect.deposit(s as usize, p);
+                1
+            };
+            Some((slot(e, h.wi.dot(h.ng) >= 0.0) as u32, h.power, kind))
+        });
+        for (s, p, kind) in hits {
+            match kind {
+                0 => out.direct.deposit(s as usize, p),
+                1 => out.indirect.deposit(s as usize, p),
+                _ => out.caustic.deposit(s as usize, p),
             }
         }
         out.stats += stats;
         lo = hi;
     }
-    out
 }
 
 /// World-space data of the elements in one frame.

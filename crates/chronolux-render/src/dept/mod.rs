@@ -9,21 +9,26 @@
 //! [`element_map::ElementMesh`]; [`reconstruct`] turns the sums into a smooth irradiance
 //! field; [`view`] renders eye rays with per-pixel direct light and element indirect light.
 
+pub mod budget;
 pub mod element_map;
 pub mod reconstruct;
 pub mod view;
 
 use crate::integrator::{Integrator, RenderedFrame, render_camera_rays};
+use budget::{AutoPhotons, PhotonCount, assess, luminances, next_total};
+use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::scene::frame::FrameScene;
-use element_map::{ElementMesh, FrameElements, FramePhotons, deposit_photons};
-use reconstruct::{ElementSolution, Filter, filtered_irradiance};
+use element_map::{ElementMesh, FrameElements, FramePhotons, deposit_more_photons};
+use reconstruct::{ElementSolution, Filter, filtered_irradiance_sigma};
 
 /// Settings of the frame-by-frame DEPT baselines.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DeptSettings {
-    /// Photons emitted per frame. Default 500 000.
+    /// Photons emitted per frame when `auto` is not set. Default 500 000.
     pub photons: u64,
+    /// Stopping rule choosing the photons of each frame ([`budget`]); `None`: `photons`.
+    pub auto: Option<AutoPhotons>,
     /// Camera samples per pixel (direct light and anti-aliasing). Default 16.
     pub spp: u32,
     /// Target element count along the scene's bounding-box diagonal (element edge =
@@ -41,6 +46,7 @@ impl Default for DeptSettings {
     fn default() -> Self {
         DeptSettings {
             photons: 500_000,
+            auto: None,
             spp: 16,
             elements: 100.0,
             max_specular_depth: 8,
@@ -57,6 +63,19 @@ impl DeptSettings {
             filter: Filter::Gaussian { radius: 2.5 },
             ..Default::default()
         }
+    }
+
+    /// These settings with `--photons` applied (`None`: unchanged).
+    pub fn with_photons(mut self, p: Option<PhotonCount>) -> Self {
+        match p {
+            None => {}
+            Some(PhotonCount::Fixed(n)) => {
+                self.photons = n;
+                self.auto = None;
+            }
+            Some(PhotonCount::Auto(a)) => self.auto = Some(a),
+        }
+        self
     }
 
     /// Defaults with a spatial bilateral filter (`dept-bilateral`).
@@ -92,15 +111,48 @@ impl Dept {
         Dept { settings }
     }
 
-    /// Photon pass and reconstruction of frame `frame` (photons `frame·N .. (frame+1)·N`).
+    /// Photon pass and reconstruction of frame `frame`: photons `frame·N .. (frame+1)·N`
+    /// for a fixed count `N`; with the stopping rule, the first photons of
+    /// `frame·max_photons ..`, in batches until [`budget::next_total`] says stop.
     pub fn solve(&self, scene: &FrameScene, frame: u32) -> DeptFrame {
         let s = &self.settings;
         let mesh = ElementMesh::build(scene, s.elements);
         let elements = FrameElements::new(scene, &mesh);
-        let first = frame as u64 * s.photons;
-        let photons = deposit_photons(scene, &mesh, first..first + s.photons, s.seed);
-        let ind = filtered_irradiance(&mesh, &photons.indirect, &elements, s.filter);
-        let cau = filtered_irradiance(&mesh, &photons.caustic, &elements, s.filter);
+        let mut photons = FramePhotons::new(mesh.element_count());
+        let (base, mut total) = match s.auto {
+            None => (frame as u64 * s.photons, s.photons),
+            Some(a) => (
+                frame as u64 * a.max_photons,
+                a.batch.clamp(1, a.max_photons.max(1)),
+            ),
+        };
+        let (ind, cau) = loop {
+            let done = photons.photons();
+            deposit_more_photons(
+                scene,
+                &mesh,
+                base + done..base + total,
+                s.seed,
+                &mut photons,
+            );
+            let (ind, si) =
+                filtered_irradiance_sigma(&mesh, &photons.indirect, &elements, s.filter);
+            let (cau, sc) = filtered_irradiance_sigma(&mesh, &photons.caustic, &elements, s.filter);
+            let Some(rule) = s.auto else {
+                break (ind, cau);
+            };
+            let a = assess_frame(&rule, &mesh, &elements, &photons, &ind, &cau, &si, &sc);
+            log::debug!(
+                "dept frame {frame}: {total} photons, {:.1} % of the power-weighted surface above the {} contrast threshold, {} photons predicted",
+                100.0 * a.fraction_above,
+                rule.weber,
+                a.predicted_photons
+            );
+            match next_total(&rule, total, &a) {
+                Some(t) => total = t,
+                None => break (ind, cau),
+            }
+        };
         DeptFrame {
             indirect: ElementSolution::from_elements(&mesh, &elements, &ind),
             caustic: ElementSolution::from_elements(&mesh, &elements, &cau),
@@ -132,6 +184,46 @@ impl Dept {
     }
 }
 
+/// The stopping rule's verdict on a frame's reconstruction: indirect + caustic estimates
+/// and their standard errors per element side, against the direct irradiance of the same
+/// photons' first hits (Gaussian-smoothed over 2.5 elements, it only sets the contrast).
+#[allow(clippy::too_many_arguments)]
+pub fn assess_frame(
+    rule: &AutoPhotons,
+    mesh: &ElementMesh,
+    elements: &FrameElements,
+    photons: &FramePhotons,
+    ind: &[Rgb],
+    cau: &[Rgb],
+    sigma_ind: &[f32],
+    sigma_cau: &[f32],
+) -> budget::NoiseAssessment {
+    let (direct, _) = filtered_irradiance_sigma(
+        mesh,
+        &photons.direct,
+        elements,
+        Filter::Gaussian { radius: 2.5 },
+    );
+    let lum: Vec<f32> = ind
+        .iter()
+        .zip(cau)
+        .map(|(a, b)| luminance(*a + *b))
+        .collect();
+    let sigma: Vec<f32> = sigma_ind
+        .iter()
+        .zip(sigma_cau)
+        .map(|(a, b)| (a * a + b * b).sqrt())
+        .collect();
+    assess(
+        rule,
+        photons.photons(),
+        &lum,
+        &sigma,
+        &luminances(&direct),
+        |slot| elements.area[slot / 2],
+    )
+}
+
 /// Eye pass over an element solution (camera samples, seed and specular depth from
 /// `settings`).
 pub fn render_view(
@@ -150,6 +242,44 @@ pub fn render_view(
         max_specular_depth: settings.max_specular_depth,
     };
     render_camera_rays(&view, scene, frame, settings.spp, settings.seed, progress)
+}
+
+/// Frame-by-frame DEPT as a sequence renderer that also reports each frame's photons.
+pub struct DeptSequence {
+    pub dept: Dept,
+    pub name: &'static str,
+    last_photons: Option<u64>,
+}
+
+impl DeptSequence {
+    pub fn new(dept: Dept, name: &'static str) -> Self {
+        DeptSequence {
+            dept,
+            name,
+            last_photons: None,
+        }
+    }
+}
+
+impl crate::sequence::SequenceRenderer for DeptSequence {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    fn render_frame(
+        &mut self,
+        scene: &FrameScene,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        let solved = self.dept.solve(scene, frame);
+        self.last_photons = Some(solved.photons.photons());
+        self.dept.render_solved(scene, frame, &solved, progress)
+    }
+
+    fn photons_last_frame(&self) -> Option<u64> {
+        self.last_photons
+    }
 }
 
 impl Integrator for Dept {

@@ -167,6 +167,20 @@ pub fn filter_with(
     nb: &Neighbours,
     weight: impl Fn(usize, usize, f32) -> f32 + Sync,
 ) -> Vec<Rgb> {
+    filter_with_sigma(acc, fe, nb, 0.0, weight).0
+}
+
+/// [`filter_with`] and the standard error of each filtered luminance estimate,
+/// `√(Σ w² (Σφ²_j + prior)) / (N Σ w A_j)` (weights taken as fixed). `prior` is added to
+/// every element's Σφ² so that elements that have no photons *yet* do not look
+/// noise-free (one phantom photon of mean power, [`prior_sq`]); 0 for the plain estimate.
+pub fn filter_with_sigma(
+    acc: &ElementAccumulators,
+    fe: &FrameElements,
+    nb: &Neighbours,
+    prior: f32,
+    weight: impl Fn(usize, usize, f32) -> f32 + Sync,
+) -> (Vec<Rgb>, Vec<f32>) {
     let inv_n = 1.0 / acc.photons.max(1) as f32;
     let n = fe.area.len();
     let rows = parallel::map_chunks(n, 1024, |range| {
@@ -174,23 +188,24 @@ pub fn filter_with(
         for e in range {
             for side in 0..2 {
                 let se = 2 * e + side;
-                let (mut num, mut den) = (Rgb::ZERO, 0.0f32);
+                let (mut num, mut den, mut sq) = (Rgb::ZERO, 0.0f32, 0.0f32);
                 for &(j, d2) in nb.of(e) {
                     let sj = 2 * j as usize + side;
                     let w = weight(se, sj, d2);
                     num += acc.flux[sj] * w;
                     den += fe.area[j as usize] * w;
+                    sq += (acc.flux_sq[sj] + prior) * w * w;
                 }
                 out.push(if den > 0.0 {
-                    num * (inv_n / den)
+                    (num * (inv_n / den), sq.sqrt() * inv_n / den)
                 } else {
-                    Rgb::ZERO
+                    (Rgb::ZERO, 0.0)
                 });
             }
         }
         out
     });
-    rows.into_iter().flatten().collect()
+    rows.into_iter().flatten().unzip()
 }
 
 /// Element irradiance after `filter` (per element side).
@@ -200,8 +215,33 @@ pub fn filtered_irradiance(
     fe: &FrameElements,
     filter: Filter,
 ) -> Vec<Rgb> {
+    filtered_irradiance_sigma(mesh, acc, fe, filter).0
+}
+
+/// [`filtered_irradiance`] and the standard error of each filtered luminance estimate
+/// (what the stopping rule reads, [`super::budget`]).
+pub fn filtered_irradiance_sigma(
+    mesh: &ElementMesh,
+    acc: &ElementAccumulators,
+    fe: &FrameElements,
+    filter: Filter,
+) -> (Vec<Rgb>, Vec<f32>) {
+    let prior = prior_sq(acc);
     let (radius, bilateral) = match filter {
-        Filter::None => return element_irradiance(acc, fe),
+        Filter::None => {
+            let inv_n = 1.0 / acc.photons.max(1) as f32;
+            let sig = (0..acc.flux.len())
+                .map(|s| {
+                    let a = fe.area[s / 2];
+                    if a > 0.0 {
+                        (acc.flux_sq[s] + prior).sqrt() * inv_n / a
+                    } else {
+                        0.0
+                    }
+                })
+                .collect();
+            return (element_irradiance(acc, fe), sig);
+        }
         Filter::Gaussian { radius } => (radius, None),
         Filter::Bilateral {
             radius,
@@ -213,12 +253,12 @@ pub fn filtered_irradiance(
     let nb = Neighbours::new(fe, r);
     let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r));
     match bilateral {
-        None => filter_with(acc, fe, &nb, |_, _, d2| (-d2 * inv2s2).exp()),
+        None => filter_with_sigma(acc, fe, &nb, prior, |_, _, d2| (-d2 * inv2s2).exp()),
         Some((kappa, min_photons)) => {
             let e = element_irradiance(acc, fe);
             let lum: Vec<f32> = e.iter().map(|c| luminance(*c)).collect();
             let sig = element_sigma(acc, fe);
-            filter_with(acc, fe, &nb, |se, sj, d2| {
+            filter_with_sigma(acc, fe, &nb, prior, |se, sj, d2| {
                 range_weight(
                     lum[se],
                     lum[sj],
@@ -230,6 +270,16 @@ pub fn filtered_irradiance(
             })
         }
     }
+}
+
+/// Mean squared luminance flux of one photon in `acc` (Σ Σφ² / Σ count; 0 if empty): the
+/// variance prior of the noise estimates.
+pub fn prior_sq(acc: &ElementAccumulators) -> f32 {
+    let n: u64 = acc.count.iter().map(|&c| c as u64).sum();
+    if n == 0 {
+        return 0.0;
+    }
+    (acc.flux_sq.iter().map(|&x| x as f64).sum::<f64>() / n as f64) as f32
 }
 
 /// Range kernel of the bilateral filter on luminance estimates `a` (centre) and `b` with

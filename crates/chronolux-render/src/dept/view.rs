@@ -3,9 +3,10 @@
 //! Per camera sample: emission seen directly or through specular chains is added as is;
 //! delta (mirror, smooth glass) bounces are followed up to `max_specular_depth`; at the
 //! first surface with a non-delta lobe the pixel gets
-//! - **direct light** by light sampling (one light chosen power-proportionally, one point
-//!   on it, ray-traced shadow; every light kind; no MIS because emission is never picked
-//!   up after a non-delta bounce here), and
+//! - **direct light** by light sampling with the path tracer's kernel
+//!   ([`crate::kernels::direct::next_event`]: one light chosen power-proportionally, one
+//!   point on it, ray-traced shadow; every light kind; weight 1 instead of MIS because
+//!   emission is never picked up after a non-delta bounce here), and
 //! - **indirect light** from the elements: `∫ f cos · E/π dω` with `E` the interpolated
 //!   irradiance of the photons that bounced at least once (indirect + caustic fields),
 //!   i.e. incident radiance taken as uniform `E/π`; one BSDF sample estimates
@@ -20,14 +21,13 @@
 use super::element_map::ElementMesh;
 use super::reconstruct::ElementSolution;
 use crate::integrator::RadianceEstimator;
+use crate::kernels::direct::{NeeWeight, next_event};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
-use chronolux_core::geometry::{Ray, spawn_ray, spawn_ray_to};
-use chronolux_core::light::Light;
+use chronolux_core::geometry::{Ray, spawn_ray};
 use chronolux_core::material;
-use chronolux_core::math::Vec2;
 use chronolux_core::sampling::sampler::PixelSampler;
-use chronolux_core::scene::frame::{FrameScene, SurfaceInteraction};
+use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
 use std::f32::consts::FRAC_1_PI;
 
@@ -39,51 +39,6 @@ pub struct DeptView<'a> {
     /// Irradiance of caustic photons (light → specular⁺ → surface).
     pub caustic: &'a ElementSolution,
     pub max_specular_depth: u32,
-}
-
-/// Radiance of a light towards a sampled point, emission textures included.
-fn light_radiance(scene: &FrameScene, light: &Light, li: Rgb, bary: Vec2) -> Rgb {
-    if let Light::Triangle { tri, instance, .. } = light {
-        let g = &scene.geometry[tri.geometry as usize];
-        let m = &scene.materials[g.material as usize];
-        if m.emissive_texture.is_some() {
-            let si = scene.surface_at(*tri, *instance, bary.x, bary.y, None);
-            return material::emission_at(m, &scene.textures, &si.shading);
-        }
-    }
-    li
-}
-
-/// Direct light at `si` towards `wo` by one light sample (no MIS), through the non-delta
-/// lobes of `bsdf`.
-pub fn direct_light_sample(
-    scene: &FrameScene,
-    si: &SurfaceInteraction,
-    wo: chronolux_core::math::Vec3,
-    bsdf: &chronolux_core::bsdf::Bsdf,
-    u_light: f32,
-    u_lp: Vec2,
-    stats: &mut Stats,
-) -> Rgb {
-    let Some((li_idx, pmf, _)) = scene.light_sampler.sample(u_light) else {
-        return Rgb::ZERO;
-    };
-    let light = &scene.lights[li_idx];
-    let Some(ls) = light.sample_li(si.p, u_lp, scene.scene_radius) else {
-        return Rgb::ZERO;
-    };
-    if pmf <= 0.0 || ls.pdf <= 0.0 {
-        return Rgb::ZERO;
-    }
-    let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.n).abs();
-    if f == Rgb::ZERO {
-        return Rgb::ZERO;
-    }
-    stats.shadow_rays += 1;
-    if scene.occluded(&spawn_ray_to(si.p, si.ng, ls.p, ls.n)) {
-        return Rgb::ZERO;
-    }
-    f * light_radiance(scene, light, ls.li, ls.bary) / (pmf * ls.pdf)
 }
 
 impl RadianceEstimator for DeptView<'_> {
@@ -116,7 +71,17 @@ impl RadianceEstimator for DeptView<'_> {
             let u_dir = sampler.next_2d();
             let diffuse = bsdf.has_non_delta();
             if diffuse {
-                l += beta * direct_light_sample(scene, &si, wo, &bsdf, u_light, u_lp, stats);
+                l += next_event(
+                    scene,
+                    &si,
+                    wo,
+                    &bsdf,
+                    beta,
+                    u_light,
+                    u_lp,
+                    NeeWeight::LightOnly,
+                    stats,
+                );
             }
             let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
                 break;

@@ -33,11 +33,11 @@
 //! callback with the power arriving there, before the photon scatters on. Hits on purely
 //! specular (delta) surfaces are not reported.
 
+use super::direct::light_radiance_at;
 use chronolux_core::accel::TriRef;
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
 use chronolux_core::geometry::spawn_ray;
-use chronolux_core::light::Light;
 use chronolux_core::material;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
@@ -105,39 +105,6 @@ impl std::ops::AddAssign for PhotonStats {
     }
 }
 
-/// Emitted radiance factor of a light at the origin of a sampled emission ray, with the
-/// emission texture of triangle lights evaluated there.
-fn emission_factor(scene: &FrameScene, light: &Light, o: Vec3, le: Rgb) -> Rgb {
-    let Light::Triangle {
-        p0,
-        e1,
-        e2,
-        tri,
-        instance,
-        ..
-    } = light
-    else {
-        return le;
-    };
-    let g = &scene.geometry[tri.geometry as usize];
-    let m = &scene.materials[g.material as usize];
-    if m.emissive_texture.is_none() {
-        return le;
-    }
-    // Barycentrics of the (slightly offset) origin by least squares on the edges.
-    let d = o - *p0;
-    let (a11, a12, a22) = (e1.dot(*e1), e1.dot(*e2), e2.dot(*e2));
-    let det = a11 * a22 - a12 * a12;
-    if det.abs() <= 0.0 {
-        return le;
-    }
-    let (r1, r2) = (d.dot(*e1), d.dot(*e2));
-    let b1 = ((a22 * r1 - a12 * r2) / det).clamp(0.0, 1.0);
-    let b2 = ((a11 * r2 - a12 * r1) / det).clamp(0.0, 1.0 - b1);
-    let si = scene.surface_at(*tri, *instance, b1, b2, None);
-    material::emission_at(m, &scene.textures, &si.shading)
-}
-
 /// Traces photon `index` of the stream keyed by `seed` through `scene`, reporting every
 /// diffuse hit to `callback` in path order. Deterministic: the same (scene, index, seed)
 /// always gives the same hits.
@@ -164,7 +131,7 @@ pub fn trace_photon(
     if les.pdf_pos <= 0.0 || les.pdf_dir <= 0.0 {
         return stats;
     }
-    let le = emission_factor(scene, light, les.ray.o, les.le);
+    let le = light_radiance_at(scene, light, les.le, les.ray.o);
     let mut beta = chronolux_core::light::emit::LeSample { le, ..les }.flux_weight() / pmf;
     if beta == Rgb::ZERO || !beta.is_finite() {
         return stats;

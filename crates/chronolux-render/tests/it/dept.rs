@@ -58,7 +58,11 @@ fn block_errors(img: &[glam::Vec3], reference: &[f64], w: usize) -> (f64, f64) {
 /// back-side light trapped between lamp and ceiling is averaged into the visible ceiling
 /// around it); at 100 the error there drops to ~1 % while the remaining block errors
 /// (≤ 5 %, at the same blocks for 25, 50 and 100 elements, and with 1e5 or 4e6 photons) do
-/// not depend on the resolution or the photon count. So at 100 elements the test allows
+/// not depend on the resolution or the photon count. They are the *reference's* noise
+/// (`diagnose_cornell_block_errors`): rare bright paths through the 1 % gap that the
+/// two-sided lamp lights make two 1024-spp path-traced images with different seeds differ
+/// by up to 8 % per block, in the same blocks; with a one-sided lamp dept and the path
+/// tracer agree within 0.5 % everywhere. So at 100 elements the test allows
 /// 8 % per 8×8 block and 1.5 % on the image mean (measured: 4.8 % and 0.35 %), and checks
 /// that the coarse mesh is at least twice as wrong (the bias does shrink with h).
 /// Photon noise at 1e6 photons and the reference's noise (1024 spp) are below 0.5 % per
@@ -352,4 +356,111 @@ fn spacetime_dept_pools_frames_on_a_static_scene() {
     let reference = blocks(&pt.render(&scene, 0, &|_| {}).pixels, 32, 8);
     let (max, mean) = block_errors(&st_img.pixels, &reference, 32);
     assert!(max < 0.08 && mean < 0.015, "block {max}, mean {mean}");
+}
+
+/// The stopping rule: the photon count it picks grows as the Weber threshold tightens
+/// (σ ∝ 1/√N: halving the threshold needs about 4× the photons, within the batch
+/// granularity and the [total + batch, 2·total] step clamp), stays within [batch, cap],
+/// and the frame's solution then meets the criterion it was stopped on.
+#[test]
+fn stopping_rule_shoots_more_photons_for_a_tighter_threshold() {
+    use chronolux_render::dept::budget::AutoPhotons;
+    let scene = frame0(cornell_box(), 16, 16);
+    let solve = |weber: f32| {
+        let rule = AutoPhotons {
+            weber,
+            batch: 10_000,
+            max_photons: 2_000_000,
+            ..Default::default()
+        };
+        let d = Dept::new(DeptSettings {
+            spp: 1,
+            elements: 30.0,
+            auto: Some(rule),
+            ..DeptSettings::spatial()
+        });
+        d.solve(&scene, 0).photons.photons()
+    };
+    let (loose, tight) = (solve(0.04), solve(0.02));
+    assert!(
+        (10_000..=2_000_000).contains(&loose) && (10_000..=2_000_000).contains(&tight),
+        "{loose} {tight}"
+    );
+    let ratio = tight as f64 / loose as f64;
+    assert!(
+        (2.0..=8.0).contains(&ratio),
+        "halving the threshold: {loose} → {tight} photons (×{ratio:.2})"
+    );
+}
+
+/// `FrameScene::geometry_instance` names the instance that carries each geometry: moving
+/// the quad's node moves that instance's transform, and the element mesh follows it.
+#[test]
+fn geometry_instance_carries_the_moving_node() {
+    let desc = Arc::new(moving_quad());
+    let mut b = FrameBuilder::new(desc, Some(AnimationId(0)), CameraChoice::First, 8, 8).unwrap();
+    let (s0, s1) = (b.build(0.0), b.build(1.0));
+    assert_eq!(s0.geometry_instance.len(), s0.geometry.len());
+    let xf0 = chronolux_render::dept::element_map::geometry_transforms(&s0);
+    let xf1 = chronolux_render::dept::element_map::geometry_transforms(&s1);
+    let moved: Vec<f32> = xf0
+        .iter()
+        .zip(&xf1)
+        .map(|(a, b)| (b.translation - a.translation).x)
+        .collect();
+    assert!(
+        moved.iter().any(|d| (d - 2.0).abs() < 1e-4),
+        "no geometry moved by +2: {moved:?}"
+    );
+    assert!(moved.iter().any(|d| d.abs() < 1e-6), "the wall is static");
+}
+
+/// Diagnostic for the unexplained ≤ 5 % block errors of `dept` on the Cornell box (run
+/// with `--ignored --nocapture`): per-block relative error against the path tracer with
+/// the lamp two-sided (as staged: its back side lights the 1 % gap under the ceiling) and
+/// one-sided, and between two path-traced images with different seeds.
+#[test]
+#[ignore]
+fn diagnose_cornell_block_errors() {
+    for two_sided in [true, false] {
+        let mut desc = cornell_box();
+        for m in desc.materials.iter_mut() {
+            if m.emissive != Rgb::ZERO {
+                m.double_sided = two_sided;
+            }
+        }
+        let scene = frame0(desc, 32, 32);
+        let pt = PathTracer::new(PathSettings {
+            spp: 1024,
+            ..Default::default()
+        });
+        let reference = blocks(&pt.render(&scene, 0, &|_| {}).pixels, 32, 8);
+        let d = Dept::new(DeptSettings {
+            spp: 256,
+            elements: 100.0,
+            photons: 1_000_000,
+            ..Default::default()
+        });
+        let b = blocks(&d.render(&scene, 0, &|_| {}).pixels, 32, 8);
+        // A second, independent path-traced image (another seed): how far apart two
+        // 1024-spp references are.
+        let pt2 = PathTracer::new(PathSettings {
+            spp: 1024,
+            seed: 7,
+            ..Default::default()
+        });
+        let b2 = blocks(&pt2.render(&scene, 0, &|_| {}).pixels, 32, 8);
+        for (name, img) in [("dept vs pt", &b), ("pt seed 7 vs pt seed 0", &b2)] {
+            println!("two-sided lamp: {two_sided}: {name} (rows top to bottom, % error)");
+            for row in 0..4 {
+                let r: Vec<String> = (0..4)
+                    .map(|c| {
+                        let k = row * 4 + c;
+                        format!("{:+6.1}", 100.0 * (img[k] - reference[k]) / reference[k])
+                    })
+                    .collect();
+                println!("  {}", r.join(" "));
+            }
+        }
+    }
 }

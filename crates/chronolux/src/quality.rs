@@ -145,6 +145,12 @@ pub fn config_for(
             rr_depth: 5,
             seed,
         }),
+        "bdpt" => TechniqueConfig::Bdpt(chronolux_render::bdpt::BdptSettings {
+            spp: effort,
+            max_depth,
+            seed,
+            ..Default::default()
+        }),
         // Photon methods: effort = thousands of photons per frame (the per-frame budget
         // for spacetime-dept); camera samples stay at the method's default.
         "dept" | "dept-spatial" | "dept-bilateral" => {
@@ -170,7 +176,7 @@ pub fn config_for(
             ..Default::default()
         }),
         m => bail!(
-            "bench quality does not know how to scale the effort of method '{m}' (known: path, dept, dept-spatial, dept-bilateral, spacetime-dept)"
+            "bench quality does not know how to scale the effort of method '{m}' (known: path, bdpt, dept, dept-spatial, dept-bilateral, spacetime-dept)"
         ),
     })
 }
@@ -191,12 +197,8 @@ pub fn run(args: QualityArgs) -> Result<()> {
     if args.target_flip.iter().any(|t| !(*t > 0.0 && *t < 1.0)) {
         bail!("--target-flip values must lie in (0, 1)");
     }
-    if let Some(t) = args.threads {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(t.max(1))
-            .build_global()
-            .context("cannot set up the thread pool")?;
-    }
+    crate::render::set_threads(args.threads)?;
+    crate::render::check_fps_and_depth(args.fps, args.max_depth)?;
     let frames = parse_frames(&args.frames)?;
     let mut refs = Vec::new();
     for &f in &frames {

@@ -1036,40 +1036,28 @@ impl Loader<'_> {
         }
         for (ti, t) in p.morph_targets().enumerate() {
             let tpath = format!("{path}.targets[{ti}]");
-            let mut mt = MorphTarget::default();
-            if let Some(a) = t.positions() {
-                let ap = format!("{tpath}.POSITION");
-                let v: Vec<Vec3> = self
-                    .read_vecs::<3>(a.index(), &ap)?
-                    .into_iter()
-                    .map(Vec3::from)
-                    .collect();
-                check_len(self, v.len(), &ap)?;
-                if v.iter().any(|d| !d.is_finite()) {
-                    return Err(self.invalid(&ap, "NaN or infinite displacement"));
-                }
-                mt.positions = Some(v);
-            }
-            if let Some(a) = t.normals() {
-                let ap = format!("{tpath}.NORMAL");
-                let v: Vec<Vec3> = self
-                    .read_vecs::<3>(a.index(), &ap)?
-                    .into_iter()
-                    .map(Vec3::from)
-                    .collect();
-                check_len(self, v.len(), &ap)?;
-                mt.normals = Some(v);
-            }
-            if let Some(a) = t.tangents() {
-                let ap = format!("{tpath}.TANGENT");
-                let v: Vec<Vec3> = self
-                    .read_vecs::<3>(a.index(), &ap)?
-                    .into_iter()
-                    .map(Vec3::from)
-                    .collect();
-                check_len(self, v.len(), &ap)?;
-                mt.tangents = Some(v);
-            }
+            // One reader for the three displacement attributes, each checked for length
+            // against the base vertices and for finite values.
+            let read_target =
+                |acc: Option<gltf::Accessor>, name: &str| -> Result<Option<Vec<Vec3>>, LoadError> {
+                    let Some(a) = acc else { return Ok(None) };
+                    let ap = format!("{tpath}.{name}");
+                    let v: Vec<Vec3> = self
+                        .read_vecs::<3>(a.index(), &ap)?
+                        .into_iter()
+                        .map(Vec3::from)
+                        .collect();
+                    check_len(self, v.len(), &ap)?;
+                    if v.iter().any(|d| !d.is_finite()) {
+                        return Err(self.invalid(&ap, "NaN or infinite displacement"));
+                    }
+                    Ok(Some(v))
+                };
+            let mt = MorphTarget {
+                positions: read_target(t.positions(), "POSITION")?,
+                normals: read_target(t.normals(), "NORMAL")?,
+                tangents: read_target(t.tangents(), "TANGENT")?,
+            };
             prim.morph_targets.push(mt);
         }
         let idx: Vec<u32> = match p.indices() {

@@ -99,6 +99,34 @@ pub struct MethodResult {
     pub levels: Vec<Level>,
     /// Per target: the first level reaching it (None: not reached up to max effort).
     pub reached: Vec<Option<Level>>,
+    /// Per target: wall time interpolated to exactly the target, log-log between the two
+    /// effort levels that bracket it (error falls as a power of effort, time rises
+    /// linearly, so both are straight in log-log). The first-level rule above overstates a
+    /// method's time by up to a whole doubling, depending only on where the grid falls;
+    /// this removes that. `None` when the target is not bracketed.
+    pub interpolated_time_s: Vec<Option<f64>>,
+}
+
+/// Wall time at which `levels` (in increasing effort) reach `target`, log-log interpolated.
+pub fn interpolate_time(levels: &[Level], target: f64, criterion: &str) -> Option<f64> {
+    let err = |l: &Level| {
+        if criterion == "max" {
+            l.flip_max
+        } else {
+            l.flip_mean
+        }
+    };
+    let k = levels.iter().position(|l| err(l) <= target)?;
+    if k == 0 {
+        return (err(&levels[0]) == target).then_some(levels[0].wall_s);
+    }
+    let (lo, hi) = (&levels[k - 1], &levels[k]);
+    let (e0, e1) = (err(lo), err(hi));
+    if !(e0 > e1 && e1 > 0.0 && lo.wall_s > 0.0 && hi.wall_s > 0.0) {
+        return Some(hi.wall_s);
+    }
+    let s = (e0 / target).ln() / (e0 / e1).ln();
+    Some(lo.wall_s * (hi.wall_s / lo.wall_s).powf(s))
 }
 
 /// The whole result; the flat fields are for the first target.
@@ -113,6 +141,11 @@ pub struct QualityResult {
     pub baseline_time_s: Option<f64>,
     /// baseline time / method time.
     pub speedup: Option<f64>,
+    /// The same from times interpolated to exactly the target (see
+    /// [`MethodResult::interpolated_time_s`]).
+    pub method_time_interp_s: Option<f64>,
+    pub baseline_time_interp_s: Option<f64>,
+    pub speedup_interp: Option<f64>,
     pub method_flicker: Option<f64>,
     pub baseline_flicker: Option<f64>,
     pub targets: Vec<f64>,
@@ -301,10 +334,15 @@ pub fn run(args: QualityArgs) -> Result<()> {
             }
             effort = (effort * 2).min(args.max_effort);
         }
+        let interpolated_time_s = targets
+            .iter()
+            .map(|t| interpolate_time(&levels, *t, &args.criterion))
+            .collect();
         results.push(MethodResult {
             method: m.clone(),
             levels,
             reached,
+            interpolated_time_s,
         });
     }
 
@@ -313,6 +351,9 @@ pub fn run(args: QualityArgs) -> Result<()> {
     let k0 = targets.iter().position(|t| *t == first).unwrap();
     let time = |r: &MethodResult, k: usize| r.reached[k].as_ref().map(|l| l.wall_s);
     let flick = |r: &MethodResult, k: usize| r.reached[k].as_ref().and_then(|l| l.flicker);
+    let interp = |r: &MethodResult, k: usize| r.interpolated_time_s[k];
+    let method_time_interp_s = interp(&results[0], k0);
+    let baseline_time_interp_s = results.get(1).and_then(|r| interp(r, k0));
     let method_time_s = time(&results[0], k0);
     let baseline_time_s = results.get(1).and_then(|r| time(r, k0));
     let result = QualityResult {
@@ -324,6 +365,12 @@ pub fn run(args: QualityArgs) -> Result<()> {
         method_time_s,
         baseline_time_s,
         speedup: match (method_time_s, baseline_time_s) {
+            (Some(a), Some(b)) if a > 0.0 => Some(b / a),
+            _ => None,
+        },
+        method_time_interp_s,
+        baseline_time_interp_s,
+        speedup_interp: match (method_time_interp_s, baseline_time_interp_s) {
             (Some(a), Some(b)) if a > 0.0 => Some(b / a),
             _ => None,
         },
@@ -364,19 +411,19 @@ pub fn markdown(r: &QualityResult) -> String {
     s += "| target FLIP |";
     for m in &r.results {
         s += &format!(
-            " {} time (s) | {} effort | {} flicker |",
-            m.method, m.method, m.method
+            " {} time (s) | {} interpolated (s) | {} effort | {} flicker |",
+            m.method, m.method, m.method, m.method
         );
     }
     if r.results.len() == 2 {
-        s += " speed-up |";
+        s += " speed-up | speed-up interpolated |";
     }
     s += "\n|---|";
     for _ in &r.results {
-        s += "---|---|---|";
+        s += "---|---|---|---|";
     }
     if r.results.len() == 2 {
-        s += "---|";
+        s += "---|---|";
     }
     s += "\n";
     for (k, t) in r.targets.iter().enumerate() {
@@ -384,8 +431,9 @@ pub fn markdown(r: &QualityResult) -> String {
         for m in &r.results {
             let l = m.reached[k].as_ref();
             s += &format!(
-                " {} | {} | {} |",
+                " {} | {} | {} | {} |",
                 opt(l.map(|l| l.wall_s), 2),
+                opt(m.interpolated_time_s[k], 2),
                 l.map_or("-".into(), |l| l.effort.to_string()),
                 opt(l.and_then(|l| l.flicker), 4)
             );
@@ -399,6 +447,16 @@ pub fn markdown(r: &QualityResult) -> String {
                 " {} |",
                 match (a, b) {
                     (Some(a), Some(b)) if a.wall_s > 0.0 => format!("{:.2}×", b.wall_s / a.wall_s),
+                    _ => "-".into(),
+                }
+            );
+            s += &format!(
+                " {} |",
+                match (
+                    r.results[0].interpolated_time_s[k],
+                    r.results[1].interpolated_time_s[k]
+                ) {
+                    (Some(a), Some(b)) if a > 0.0 => format!("{:.2}×", b / a),
                     _ => "-".into(),
                 }
             );
@@ -424,4 +482,34 @@ pub fn markdown(r: &QualityResult) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn level(effort: u32, wall_s: f64, flip: f64) -> Level {
+        Level {
+            effort,
+            wall_s,
+            cpu_s: wall_s,
+            flip_mean: flip,
+            flip_max: flip,
+            relmse_mean: 0.0,
+            flicker: None,
+        }
+    }
+
+    #[test]
+    fn interpolation_is_exact_on_a_power_law() {
+        // FLIP = 0.4 / sqrt(effort), time = effort / 10: target 0.1 is reached at effort 16,
+        // time 1.6, between the levels 8 and 32 of a grid that skips 16.
+        let levels: Vec<Level> = [2u32, 8, 32]
+            .iter()
+            .map(|&e| level(e, e as f64 / 10.0, 0.4 / (e as f64).sqrt()))
+            .collect();
+        let t = interpolate_time(&levels, 0.1, "mean").unwrap();
+        assert!((t - 1.6).abs() < 1e-9, "{t}");
+        assert_eq!(interpolate_time(&levels, 0.01, "mean"), None);
+    }
 }

@@ -162,6 +162,29 @@ impl Instance {
         }
     }
 
+    /// The ray in this instance's object space (t is unchanged: directions are not
+    /// renormalised).
+    #[inline]
+    fn to_object(&self, o: Vec3A, d: Vec3A) -> (Vec3A, Vec3A) {
+        if self.identity {
+            (o, d)
+        } else {
+            (
+                self.object_from_world.transform_point3a(o),
+                self.object_from_world.transform_vector3a(d),
+            )
+        }
+    }
+
+    /// A BLAS-local triangle reference with the frame-wide geometry id.
+    #[inline]
+    fn global(&self, t: TriRef) -> TriRef {
+        TriRef {
+            geometry: t.geometry + self.geometry_base,
+            ..t
+        }
+    }
+
     /// Closest hit in this instance (world-space t, frame-wide geometry id).
     #[inline]
     pub(crate) fn closest_world<F: Fn(TriRef, f32, f32) -> bool>(
@@ -171,35 +194,10 @@ impl Instance {
         tmax: f32,
         accept: &F,
     ) -> Option<(f32, TriRef, f32, f32)> {
-        let base = self.geometry_base;
-        let acc = |t: TriRef, b1, b2| {
-            accept(
-                TriRef {
-                    geometry: t.geometry + base,
-                    ..t
-                },
-                b1,
-                b2,
-            )
-        };
-        let h = if self.identity {
-            self.blas.closest(o, d, tmax, &acc)
-        } else {
-            let lo = self.object_from_world.transform_point3a(o);
-            let ld = self.object_from_world.transform_vector3a(d);
-            self.blas.closest(lo, ld, tmax, &acc)
-        };
-        h.map(|(t, tri, b1, b2)| {
-            (
-                t,
-                TriRef {
-                    geometry: tri.geometry + base,
-                    ..tri
-                },
-                b1,
-                b2,
-            )
-        })
+        let (lo, ld) = self.to_object(o, d);
+        self.blas
+            .closest(lo, ld, tmax, &|t, b1, b2| accept(self.global(t), b1, b2))
+            .map(|(t, tri, b1, b2)| (t, self.global(tri), b1, b2))
     }
 
     /// Whether anything in this instance blocks the ray before `tmax` (world-space t).
@@ -211,24 +209,9 @@ impl Instance {
         tmax: f32,
         accept: &F,
     ) -> bool {
-        let base = self.geometry_base;
-        let acc = |t: TriRef, b1, b2| {
-            accept(
-                TriRef {
-                    geometry: t.geometry + base,
-                    ..t
-                },
-                b1,
-                b2,
-            )
-        };
-        if self.identity {
-            self.blas.any(o, d, tmax, &acc)
-        } else {
-            let lo = self.object_from_world.transform_point3a(o);
-            let ld = self.object_from_world.transform_vector3a(d);
-            self.blas.any(lo, ld, tmax, &acc)
-        }
+        let (lo, ld) = self.to_object(o, d);
+        self.blas
+            .any(lo, ld, tmax, &|t, b1, b2| accept(self.global(t), b1, b2))
     }
 
     pub fn with_geometry_base(mut self, base: u32) -> Self {

@@ -49,6 +49,14 @@ pub trait RadianceEstimator: Sync {
 /// stream); it only sets the grain of parallel work.
 pub const TILE: u32 = 16;
 
+/// Pixel rectangle (x0, y0, width, height) of tile `t` in a `w`×`h` image cut into
+/// `tile`×`tile` tiles, `tiles_x` per row; edge tiles are clipped.
+#[inline]
+fn tile_rect(t: u32, tiles_x: u32, tile: u32, w: u32, h: u32) -> (u32, u32, u32, u32) {
+    let (x0, y0) = ((t % tiles_x) * tile, (t / tiles_x) * tile);
+    (x0, y0, tile.min(w - x0), tile.min(h - y0))
+}
+
 /// The one camera-ray driver: `spp` samples per pixel through `est`, box-filtered, tiles
 /// rendered in parallel and merged in tile order (bit-identical for any thread count).
 pub fn render_camera_rays<E: RadianceEstimator>(
@@ -80,9 +88,7 @@ pub fn render_camera_rays_tiled<E: RadianceEstimator>(
     let tiles_y = h.div_ceil(tile);
     let n_tiles = (tiles_x * tiles_y) as usize;
     let results = parallel::map_chunks(n_tiles, 1, |range| {
-        let t = range.start as u32;
-        let (x0, y0) = ((t % tiles_x) * tile, (t / tiles_x) * tile);
-        let (tw, th) = (tile.min(w - x0), tile.min(h - y0));
+        let (x0, y0, tw, th) = tile_rect(range.start as u32, tiles_x, tile, w, h);
         let mut film = Film::new(tw, th);
         let mut stats = Stats::default();
         let mut invalid = 0u64;
@@ -170,9 +176,7 @@ pub fn render_with_splats<E: SplattingEstimator>(
     let mut pass = vec![Rgb::ZERO; (w * h) as usize];
     for s in 0..spp {
         let results = parallel::map_chunks(n_tiles, 1, |range| {
-            let t = range.start as u32;
-            let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-            let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+            let (x0, y0, tw, th) = tile_rect(range.start as u32, tiles_x, TILE, w, h);
             let mut own = Vec::with_capacity((tw * th) as usize);
             let mut splats = Vec::new();
             let mut stats = Stats::default();

@@ -582,6 +582,25 @@ impl Loader<'_> {
             .collect())
     }
 
+    /// A per-vertex attribute: `N`-component elements mapped by `f`, which must number `nv`
+    /// (the primitive's POSITION count).
+    fn read_vertex_attr<const N: usize, T>(
+        &self,
+        idx: usize,
+        path: &str,
+        nv: usize,
+        f: impl Fn([f32; N]) -> T,
+    ) -> Result<Vec<T>, LoadError> {
+        let v: Vec<T> = self.read_vecs::<N>(idx, path)?.into_iter().map(f).collect();
+        if v.len() != nv {
+            return Err(self.invalid(
+                path,
+                format!("has {} elements but POSITION has {nv}", v.len()),
+            ));
+        }
+        Ok(v)
+    }
+
     fn read_scalars_u32(&self, idx: usize, path: &str) -> Result<Vec<u32>, LoadError> {
         let (v, n) = self.read_accessor(idx, path)?;
         if n != 1 {
@@ -964,42 +983,24 @@ impl Loader<'_> {
             material: p.material().index().map(|i| MaterialId(i as u32)),
             ..Default::default()
         };
-        let check_len = |this: &Self, len: usize, apath: &str| -> Result<(), LoadError> {
-            if len != nv {
-                return Err(
-                    this.invalid(apath, format!("has {len} elements but POSITION has {nv}"))
-                );
-            }
-            Ok(())
-        };
         for (sem, acc) in p.attributes() {
             let apath = format!("{path}.attributes.{}", sem.to_string());
             match sem {
                 Semantic::Normals => {
-                    let v: Vec<Vec3> = self
-                        .read_vecs::<3>(acc.index(), &apath)?
-                        .into_iter()
-                        .map(|a| Vec3::from(a).normalize_or_zero())
-                        .collect();
-                    check_len(self, v.len(), &apath)?;
+                    let v: Vec<Vec3> =
+                        self.read_vertex_attr::<3, _>(acc.index(), &apath, nv, |a| {
+                            Vec3::from(a).normalize_or_zero()
+                        })?;
                     prim.normals = Some(v);
                 }
                 Semantic::Tangents => {
-                    let v: Vec<Vec4> = self
-                        .read_vecs::<4>(acc.index(), &apath)?
-                        .into_iter()
-                        .map(Vec4::from)
-                        .collect();
-                    check_len(self, v.len(), &apath)?;
+                    let v: Vec<Vec4> =
+                        self.read_vertex_attr::<4, _>(acc.index(), &apath, nv, Vec4::from)?;
                     prim.tangents = Some(v);
                 }
                 Semantic::TexCoords(set @ (0 | 1)) => {
-                    let v: Vec<Vec2> = self
-                        .read_vecs::<2>(acc.index(), &apath)?
-                        .into_iter()
-                        .map(Vec2::from)
-                        .collect();
-                    check_len(self, v.len(), &apath)?;
+                    let v: Vec<Vec2> =
+                        self.read_vertex_attr::<2, _>(acc.index(), &apath, nv, Vec2::from)?;
                     if set == 0 {
                         prim.uvs = Some(v);
                     } else {
@@ -1007,21 +1008,15 @@ impl Loader<'_> {
                     }
                 }
                 Semantic::Joints(0) => {
-                    let v: Vec<[u16; 4]> = self
-                        .read_vecs::<4>(acc.index(), &apath)?
-                        .into_iter()
-                        .map(|a| a.map(|x| x.clamp(0.0, u16::MAX as f32) as u16))
-                        .collect();
-                    check_len(self, v.len(), &apath)?;
+                    let v: Vec<[u16; 4]> =
+                        self.read_vertex_attr::<4, _>(acc.index(), &apath, nv, |a| {
+                            a.map(|x| x.clamp(0.0, u16::MAX as f32) as u16)
+                        })?;
                     prim.joints = Some(v);
                 }
                 Semantic::Weights(0) => {
-                    let v: Vec<Vec4> = self
-                        .read_vecs::<4>(acc.index(), &apath)?
-                        .into_iter()
-                        .map(Vec4::from)
-                        .collect();
-                    check_len(self, v.len(), &apath)?;
+                    let v: Vec<Vec4> =
+                        self.read_vertex_attr::<4, _>(acc.index(), &apath, nv, Vec4::from)?;
                     prim.joint_weights = Some(v);
                 }
                 _ => {}
@@ -1042,12 +1037,7 @@ impl Loader<'_> {
                 |acc: Option<gltf::Accessor>, name: &str| -> Result<Option<Vec<Vec3>>, LoadError> {
                     let Some(a) = acc else { return Ok(None) };
                     let ap = format!("{tpath}.{name}");
-                    let v: Vec<Vec3> = self
-                        .read_vecs::<3>(a.index(), &ap)?
-                        .into_iter()
-                        .map(Vec3::from)
-                        .collect();
-                    check_len(self, v.len(), &ap)?;
+                    let v = self.read_vertex_attr::<3, _>(a.index(), &ap, nv, Vec3::from)?;
                     if v.iter().any(|d| !d.is_finite()) {
                         return Err(self.invalid(&ap, "NaN or infinite displacement"));
                     }

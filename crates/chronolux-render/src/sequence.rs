@@ -2,16 +2,18 @@
 //! by every baseline.
 
 use crate::integrator::{Integrator, RenderedFrame};
-use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::scene::source::FrameSource;
 
 /// Renders the frames of an animation in increasing order; may keep state between frames
 /// (temporal techniques do, baselines do not).
 pub trait SequenceRenderer {
     /// Short name of the technique (`path`, ...).
     fn name(&self) -> &'static str;
+    /// Renders frame `frame`, taking its scene (and, for techniques with a window, the
+    /// scenes of neighbouring frames) from `source`.
     fn render_frame(
         &mut self,
-        scene: &FrameScene,
+        source: &mut FrameSource,
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame;
@@ -35,10 +37,11 @@ impl<I: Integrator> SequenceRenderer for FrameByFrame<I> {
 
     fn render_frame(
         &mut self,
-        scene: &FrameScene,
+        source: &mut FrameSource,
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
-        self.integrator.render(scene, frame, progress)
+        let scene = source.frame(frame);
+        self.integrator.render(&scene, frame, progress)
     }
 }

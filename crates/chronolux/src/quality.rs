@@ -17,6 +17,7 @@ use crate::scene_input;
 use anyhow::{Context, Result, bail};
 use chronolux_core::metrics::{self, flip};
 use chronolux_core::scene::frame::FrameBuilder;
+use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::read_exr;
 use chronolux_render::dept::DeptSettings;
 use chronolux_render::pt::PathSettings;
@@ -270,13 +271,13 @@ pub fn run(args: QualityArgs) -> Result<()> {
         let mut effort = args.start_effort;
         loop {
             let mut renderer = config_for(m, effort, args.max_depth, args.seed)?.build();
-            let mut builder =
+            let builder =
                 FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+            let mut source = FrameSource::new(builder, args.fps, frames.clone());
             let (t0, c0) = (Instant::now(), cpu_seconds());
             let mut images = Vec::new();
             for &f in &frames {
-                let scene = builder.build(f as f32 / args.fps);
-                images.push(renderer.render_frame(&scene, f, &|_| {}).pixels);
+                images.push(renderer.render_frame(&mut source, f, &|_| {}).pixels);
             }
             let wall_s = t0.elapsed().as_secs_f64();
             let cpu_s = match (c0, cpu_seconds()) {

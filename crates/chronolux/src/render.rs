@@ -6,6 +6,7 @@ use crate::scene_input;
 use anyhow::{Context, Result, bail};
 use chronolux_core::scene::desc::{Projection, SceneDesc};
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
+use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::Image;
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
 use chronolux_render::dept::budget::PhotonCount;
@@ -209,7 +210,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let mut renderer = config.build();
     let desc = Arc::new(input.desc);
-    let mut builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+    let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+    let mut source = FrameSource::new(builder, args.fps, frames.clone());
 
     let settings = serde_json::json!({
         "technique": config,
@@ -292,9 +294,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
             }
             let t = f as f32 / args.fps;
             let start = Instant::now();
-            let scene = builder.build(t);
             pixel_bar.reset();
-            let out = renderer.render_frame(&scene, f, &|n| pixel_bar.inc(n));
+            let out = renderer.render_frame(&mut source, f, &|n| pixel_bar.inc(n));
             let image = Image {
                 width: out.width,
                 height: out.height,
@@ -313,7 +314,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     "samples": out.stats.samples,
                     "invalid_samples": out.invalid_samples,
                     "photons": renderer.photons_last_frame(),
-                    "build": builder.last_build,
+                    "build": source.last_build,
                 }),
             );
             manifest.upsert_frame(rec);

@@ -5,5 +5,6 @@ pub mod anim;
 pub mod desc;
 pub mod frame;
 pub mod generated;
+pub mod source;
 pub mod stage;
 pub mod testing;

@@ -268,10 +268,12 @@ impl crate::sequence::SequenceRenderer for DeptSequence {
 
     fn render_frame(
         &mut self,
-        scene: &FrameScene,
+        source: &mut chronolux_core::scene::source::FrameSource,
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
+        let scene = source.frame(frame);
+        let scene = &*scene;
         let solved = self.dept.solve(scene, frame);
         self.last_photons = Some(solved.photons.photons());
         self.dept.render_solved(scene, frame, &solved, progress)

@@ -47,7 +47,6 @@ use crate::integrator::RenderedFrame;
 use crate::sequence::SequenceRenderer;
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::parallel;
-use chronolux_core::scene::frame::FrameScene;
 use std::collections::VecDeque;
 
 /// Settings of `spacetime-dept`.
@@ -316,10 +315,12 @@ impl SequenceRenderer for SpacetimeDept {
 
     fn render_frame(
         &mut self,
-        scene: &FrameScene,
+        source: &mut chronolux_core::scene::source::FrameSource,
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
+        let scene = source.frame(frame);
+        let scene = &*scene;
         let s = self.settings.clone();
         if !self.mesh.as_ref().is_some_and(|m| m.matches(scene)) {
             self.mesh = Some(ElementMesh::build(scene, s.elements));

@@ -314,6 +314,7 @@ fn spacetime_dept_pools_frames_on_a_static_scene() {
     use chronolux_render::sequence::SequenceRenderer;
     use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
     let scene = frame0(cornell_box(), 32, 32);
+    let mut src = crate::source(cornell_box(), 32, 32, 24.0, (0..5).collect());
     let (spp, elements) = (16, 50.0);
     let mut st = SpacetimeDept::new(SpacetimeSettings {
         spp,
@@ -323,7 +324,7 @@ fn spacetime_dept_pools_frames_on_a_static_scene() {
     });
     let mut last = None;
     for f in 0..5 {
-        last = Some(st.render_frame(&scene, f, &|_| {}));
+        last = Some(st.render_frame(&mut src, f, &|_| {}));
     }
     let st_img = last.unwrap();
     let dept = |photons: u64| {

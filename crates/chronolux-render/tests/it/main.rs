@@ -20,6 +20,20 @@ pub fn frame0(desc: SceneDesc, w: u32, h: u32) -> FrameScene {
     b.build(0.0)
 }
 
+/// The frame source of `desc` at `w`×`h` and `fps`, first animation clip if any, for
+/// rendering `frames`.
+pub fn source(
+    desc: SceneDesc,
+    w: u32,
+    h: u32,
+    fps: f32,
+    frames: Vec<u32>,
+) -> chronolux_core::scene::source::FrameSource {
+    let anim = (!desc.animations.is_empty()).then_some(chronolux_core::scene::desc::AnimationId(0));
+    let b = FrameBuilder::new(Arc::new(desc), anim, CameraChoice::First, w, h).unwrap();
+    chronolux_core::scene::source::FrameSource::new(b, fps, frames)
+}
+
 /// Mean and standard error of the mean over pixels (channel average).
 pub fn mean_and_stderr(px: &[glam::Vec3]) -> (f64, f64) {
     let v: Vec<f64> = px

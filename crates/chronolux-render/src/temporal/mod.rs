@@ -3,5 +3,8 @@
 //!
 //! - [`spacetime_dept`]: space-time photon density estimation on mesh elements with a
 //!   spatio-temporal bilateral filter (Weber et al. 2004), baseline `dept-spatial`.
+//! - [`window_film`]: accumulation of the open frames of a sliding window (samples made
+//!   in one frame and reused in its neighbours).
 
 pub mod spacetime_dept;
+pub mod window_film;

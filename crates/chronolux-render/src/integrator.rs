@@ -52,7 +52,7 @@ pub const TILE: u32 = 16;
 /// Pixel rectangle (x0, y0, width, height) of tile `t` in a `w`×`h` image cut into
 /// `tile`×`tile` tiles, `tiles_x` per row; edge tiles are clipped.
 #[inline]
-fn tile_rect(t: u32, tiles_x: u32, tile: u32, w: u32, h: u32) -> (u32, u32, u32, u32) {
+pub(crate) fn tile_rect(t: u32, tiles_x: u32, tile: u32, w: u32, h: u32) -> (u32, u32, u32, u32) {
     let (x0, y0) = ((t % tiles_x) * tile, (t / tiles_x) * tile);
     (x0, y0, tile.min(w - x0), tile.min(h - y0))
 }

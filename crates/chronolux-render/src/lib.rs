@@ -25,6 +25,7 @@ pub mod bdpt;
 pub mod dept;
 pub mod integrator;
 pub mod kernels;
+pub mod motion_blur;
 pub mod pt;
 pub mod registry;
 pub mod sequence;

@@ -4,7 +4,9 @@
 //! - [`spacetime_dept`]: space-time photon density estimation on mesh elements with a
 //!   spatio-temporal bilateral filter (Weber et al. 2004), baseline `dept-spatial`.
 //! - [`window_film`]: accumulation of the open frames of a sliding window (samples made
-//!   in one frame and reused in its neighbours).
+//!   in one frame and reused in its neighbours), in tiles with an optional disk cache.
+//! - [`blur`]: motion blur by splatting a sample along its projected trajectory.
 
+pub mod blur;
 pub mod spacetime_dept;
 pub mod window_film;

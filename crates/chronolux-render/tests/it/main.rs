@@ -2,12 +2,14 @@
 //! derivable answers.
 
 mod bdpt;
+mod blur;
 mod dept;
 mod determinism;
 mod furnace;
 mod multi_frame;
 mod peer;
 mod photon;
+mod window_film;
 
 use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};

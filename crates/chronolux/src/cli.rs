@@ -88,6 +88,16 @@ pub struct RenderArgs {
     /// per-element temporal window with a bilateral filter.
     #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept"])]
     pub method: String,
+    /// Motion blur: fraction of the frame interval the shutter is open, in [0, 1], centred
+    /// on the frame time (Blender's default); 0 = no motion blur. `path` only: each pixel
+    /// sample gets a time in the shutter, the scene is built at min(spp, 16) instants.
+    #[arg(
+        long,
+        default_value_t = 0.0,
+        value_name = "S",
+        allow_negative_numbers = true
+    )]
+    pub shutter: f32,
     /// Photons per frame of the photon methods (`dept`, `dept-spatial`, `dept-bilateral`;
     /// for `spacetime-dept` the per-frame budget, before pooling over frames): a count
     /// (e.g. 250000), or `auto` for the stopping rule, which shoots batches until the

@@ -115,6 +115,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if !args.exposure.is_finite() {
         bail!("--exposure must be a finite number of stops");
     }
+    chronolux_render::motion_blur::check_shutter(args.shutter).map_err(anyhow::Error::msg)?;
+    if args.shutter > 0.0 && args.method != "path" {
+        bail!(
+            "--shutter (motion blur) is implemented for --method path only, not {}",
+            args.method
+        );
+    }
     set_threads(args.threads)?;
     // Everything that can be checked without the scene is checked before loading it.
     let requested_frames = args.frames.as_deref().map(parse_frames).transpose()?;
@@ -208,7 +215,15 @@ pub fn run(args: RenderArgs) -> Result<()> {
         ),
         m => bail!("unknown --method '{m}'"),
     };
-    let mut renderer = config.build();
+    let mut renderer: Box<dyn chronolux_render::sequence::SequenceRenderer + Send> = match &config {
+        TechniqueConfig::Path(s) if args.shutter > 0.0 => {
+            Box::new(chronolux_render::motion_blur::MotionBlurPath::new(
+                chronolux_render::pt::PathTracer::new(s.clone()),
+                args.shutter,
+            ))
+        }
+        _ => config.build(),
+    };
     let desc = Arc::new(input.desc);
     let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
     let mut source = FrameSource::new(builder, args.fps, frames.clone());
@@ -217,6 +232,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         "technique": config,
         "resolution": [w, h],
         "fps": args.fps,
+        "shutter": args.shutter,
         "frames": frames,
         "exposure": args.exposure,
         "threads": rayon::current_num_threads(),
@@ -365,6 +381,7 @@ fn check_resumable(
         "technique",
         "resolution",
         "fps",
+        "shutter",
         "exposure",
         "animation",
         "camera",

@@ -166,6 +166,9 @@ pub struct WindowFilm {
     cache_dir: Option<PathBuf>,
     scratch: Vec<u8>,
     keys: Vec<(u64, u32)>,
+    groups: Vec<(usize, usize)>,
+    /// Direction of the next batch's walk over its (frame, tile) groups.
+    reverse: bool,
     stats: FilmStats,
 }
 
@@ -200,6 +203,8 @@ impl WindowFilm {
             cache_dir: None,
             scratch: Vec::new(),
             keys: Vec::new(),
+            groups: Vec::new(),
+            reverse: false,
             stats: FilmStats {
                 budget_bytes: budget,
                 ..Default::default()
@@ -266,10 +271,25 @@ impl WindowFilm {
         }));
         // (key, index) pairs are distinct: sorting them is a stable sort by key.
         keys.sort_unstable();
+        let mut groups = std::mem::take(&mut self.groups);
+        groups.clear();
         let mut g = 0;
         while g < keys.len() {
+            let end = g + keys[g..].iter().take_while(|k| k.0 == keys[g].0).count();
+            groups.push((g, end));
+            g = end;
+        }
+        // Consecutive batches of a sweep touch nearly the same tiles in the same order: a
+        // cyclic pattern on which LRU misses every time once the tiles do not all fit.
+        // Alternating the direction makes the most recently used tiles the next ones used,
+        // so hits degrade gracefully with the budget. Groups are disjoint pixel sets, so
+        // the order of groups changes no sum.
+        if self.reverse {
+            groups.reverse();
+        }
+        self.reverse = !self.reverse;
+        for &(g, end) in &groups {
             let key = keys[g].0;
-            let end = g + keys[g..].iter().take_while(|k| k.0 == key).count();
             let (frame, tile) = ((key >> 32) as u32, key as u32);
             let (x0, y0, tw, _) = self.tile_rect(tile);
             let width = self.width;
@@ -285,9 +305,9 @@ impl WindowFilm {
                     buf.weight[k] += c.weight;
                 }
             }
-            g = end;
         }
         self.keys = keys;
+        self.groups = groups;
     }
 
     /// The accumulators of (frame, tile), made resident (created, or read back from disk)

@@ -471,3 +471,24 @@ fn trajectory_splats_of_a_moving_quad_match_the_analytic_blur() {
         }
     }
 }
+
+#[test]
+fn time_sampled_frames_do_not_depend_on_the_thread_count() {
+    let tracer = PathTracer::new(PathSettings {
+        spp: 16,
+        max_depth: Some(1),
+        ..Default::default()
+    });
+    let render = |threads: usize| {
+        let mut source = crate::source(moving_quad(), IW, IH, FPS, vec![1]);
+        let mut mb = MotionBlurPath::new(tracer.clone(), SHUTTER);
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| mb.render_frame(&mut source, 1, &|_| {}))
+    };
+    let (a, b) = (render(1), render(3));
+    assert_eq!(a.pixels, b.pixels);
+    assert_eq!(a.variance, b.variance);
+}

@@ -87,48 +87,59 @@ pub struct FilmStats {
     pub budget_bytes: u64,
 }
 
-/// Accumulators of one tile.
+/// Accumulators of one tile: per pixel 7 floats, Σ value·weight (x, y, z), Σ weight,
+/// Σ splat (x, y, z) — one pixel's accumulators in one cache line, and a tile's bytes on
+/// disk are the floats' exact little-endian bit patterns in this order.
 struct TileBuf {
-    sum: Vec<Rgb>,
-    weight: Vec<f32>,
-    splat: Vec<Rgb>,
+    data: Vec<f32>,
 }
+
+const FLOATS: usize = 7;
 
 impl TileBuf {
     fn zeros(n: usize) -> Self {
         TileBuf {
-            sum: vec![Rgb::ZERO; n],
-            weight: vec![0.0; n],
-            splat: vec![Rgb::ZERO; n],
+            data: vec![0.0; FLOATS * n],
         }
     }
 
-    /// Exact little-endian bit patterns, sums then weights then splats.
+    #[inline]
+    fn add(&mut self, k: usize, c: &Contribution) {
+        let d = &mut self.data[FLOATS * k..FLOATS * k + FLOATS];
+        if c.splat {
+            d[4] += c.value.x;
+            d[5] += c.value.y;
+            d[6] += c.value.z;
+        } else {
+            // The same f32 operations as `sum += value * weight; weight += weight` on Rgb.
+            let v = c.value * c.weight;
+            d[0] += v.x;
+            d[1] += v.y;
+            d[2] += v.z;
+            d[3] += c.weight;
+        }
+    }
+
+    /// (Σ value·weight, Σ weight, Σ splat) of pixel `k`.
+    #[inline]
+    fn get(&self, k: usize) -> (Rgb, f32, Rgb) {
+        let d = &self.data[FLOATS * k..FLOATS * k + FLOATS];
+        (Rgb::new(d[0], d[1], d[2]), d[3], Rgb::new(d[4], d[5], d[6]))
+    }
+
     fn write_bytes(&self, out: &mut Vec<u8>) {
-        out.clear();
-        for v in &self.sum {
-            out.extend_from_slice(&v.x.to_le_bytes());
-            out.extend_from_slice(&v.y.to_le_bytes());
-            out.extend_from_slice(&v.z.to_le_bytes());
-        }
-        for w in &self.weight {
-            out.extend_from_slice(&w.to_le_bytes());
-        }
-        for v in &self.splat {
-            out.extend_from_slice(&v.x.to_le_bytes());
-            out.extend_from_slice(&v.y.to_le_bytes());
-            out.extend_from_slice(&v.z.to_le_bytes());
+        out.resize(4 * self.data.len(), 0);
+        for (b, v) in out.chunks_exact_mut(4).zip(&self.data) {
+            b.copy_from_slice(&v.to_le_bytes());
         }
     }
 
     fn read_bytes(n: usize, bytes: &[u8]) -> Self {
-        let f = |i: usize| f32::from_le_bytes(bytes[4 * i..4 * i + 4].try_into().unwrap());
-        let rgb = |i: usize| Rgb::new(f(i), f(i + 1), f(i + 2));
-        TileBuf {
-            sum: (0..n).map(|p| rgb(3 * p)).collect(),
-            weight: (0..n).map(|p| f(3 * n + p)).collect(),
-            splat: (0..n).map(|p| rgb(4 * n + 3 * p)).collect(),
-        }
+        let data = bytes[..4 * FLOATS * n]
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        TileBuf { data }
     }
 }
 
@@ -298,12 +309,7 @@ impl WindowFilm {
                 let c = &batch[i as usize];
                 let (x, y) = (c.pixel % width, c.pixel / width);
                 let k = ((y - y0) * tw + (x - x0)) as usize;
-                if c.splat {
-                    buf.splat[k] += c.value;
-                } else {
-                    buf.sum[k] += c.value * c.weight;
-                    buf.weight[k] += c.weight;
-                }
+                buf.add(k, c);
             }
         }
         self.keys = keys;
@@ -484,13 +490,14 @@ impl WindowFilm {
                 for x in 0..tw {
                     let k = (y * tw + x) as usize;
                     let i = ((y0 + y) * self.width + x0 + x) as usize;
-                    let mean = if buf.weight[k] > 0.0 {
-                        buf.sum[k] / buf.weight[k]
+                    let (sum, weight, splat) = buf.get(k);
+                    let mean = if weight > 0.0 {
+                        sum / weight
                     } else {
                         Rgb::ZERO
                     };
-                    px[i] = mean + buf.splat[k] * splat_scale;
-                    wt[i] = buf.weight[k];
+                    px[i] = mean + splat * splat_scale;
+                    wt[i] = weight;
                 }
             }
         }

@@ -1,4 +1,4 @@
-//! Motion blur for the path tracer by time sampling (`--shutter S`).
+//! Motion blur for the path tracer and BDPT by time sampling (`--shutter S`).
 //!
 //! The shutter is open for `S` of a frame interval, centred on the frame time (Blender's
 //! default): frame f integrates over `[f/fps − S/(2·fps), f/fps + S/(2·fps)]`. Scenes are
@@ -23,7 +23,10 @@
 //! beyond it the blur shows `T` discrete copies (strobing). `S = 0` renders the frame
 //! exactly as without motion blur (same sample streams).
 
-use crate::integrator::{Integrator, RadianceEstimator, RenderedFrame, TILE, tile_rect};
+use crate::bdpt::Bdpt;
+use crate::integrator::{
+    Integrator, RadianceEstimator, RenderedFrame, SplattingEstimator, TILE, tile_rect,
+};
 use crate::pt::PathTracer;
 use crate::sequence::SequenceRenderer;
 use chronolux_core::color::Rgb;
@@ -65,29 +68,82 @@ pub fn check_shutter(shutter: f32) -> Result<(), String> {
     }
 }
 
-/// The path tracer with a shutter: frame by frame, each frame time-sampled over its
-/// shutter interval (see the module doc).
-pub struct MotionBlurPath {
-    pub tracer: PathTracer,
+/// An integrator that can time-sample a shutter: it renders one frame from the scenes of
+/// the shutter's instants, each pixel sample drawing its instant from its own stream.
+pub trait ShutterIntegrator: Integrator + Send {
+    /// Technique name (`path`, `bdpt`).
+    const NAME: &'static str;
+    fn spp(&self) -> u32;
+    /// Renders frame `frame` over `scenes` (one per instant, in time order).
+    fn render_shutter(
+        &self,
+        scenes: &[FrameScene],
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame;
+}
+
+impl ShutterIntegrator for PathTracer {
+    const NAME: &'static str = "path";
+    fn spp(&self) -> u32 {
+        self.settings.spp
+    }
+    fn render_shutter(
+        &self,
+        scenes: &[FrameScene],
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        let s = &self.settings;
+        render_time_sampled(self, scenes, frame, s.spp, s.seed, progress)
+    }
+}
+
+impl ShutterIntegrator for Bdpt {
+    const NAME: &'static str = "bdpt";
+    fn spp(&self) -> u32 {
+        self.settings.spp
+    }
+    fn render_shutter(
+        &self,
+        scenes: &[FrameScene],
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        let s = &self.settings;
+        render_with_splats_time_sampled(self, scenes, frame, s.spp, s.seed, progress)
+    }
+}
+
+/// A single-frame integrator with a shutter: frame by frame, each frame time-sampled over
+/// its shutter interval (see the module doc).
+pub struct MotionBlur<I: ShutterIntegrator> {
+    pub integrator: I,
     /// Fraction of the frame interval the shutter is open, in [0, 1].
     pub shutter: f32,
 }
 
-impl MotionBlurPath {
-    pub fn new(tracer: PathTracer, shutter: f32) -> Self {
+/// The path tracer with a shutter (`--method path --shutter S`).
+pub type MotionBlurPath = MotionBlur<PathTracer>;
+
+impl<I: ShutterIntegrator> MotionBlur<I> {
+    pub fn new(integrator: I, shutter: f32) -> Self {
         debug_assert!(check_shutter(shutter).is_ok());
-        MotionBlurPath { tracer, shutter }
+        MotionBlur {
+            integrator,
+            shutter,
+        }
     }
 
     /// Number of instants the shutter of a frame is discretised into.
     pub fn instants(&self) -> u32 {
-        self.tracer.settings.spp.clamp(1, MAX_INSTANTS)
+        self.integrator.spp().clamp(1, MAX_INSTANTS)
     }
 }
 
-impl SequenceRenderer for MotionBlurPath {
+impl<I: ShutterIntegrator> SequenceRenderer for MotionBlur<I> {
     fn name(&self) -> &'static str {
-        "path"
+        I::NAME
     }
 
     fn render_frame(
@@ -97,15 +153,16 @@ impl SequenceRenderer for MotionBlurPath {
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
         if self.shutter == 0.0 {
-            return self.tracer.render(&source.frame(frame), frame, progress);
+            return self
+                .integrator
+                .render(&source.frame(frame), frame, progress);
         }
         let scenes: Vec<FrameScene> =
             shutter_instants(frame, source.fps(), self.shutter, self.instants())
                 .into_iter()
                 .map(|t| source.at_time(t))
                 .collect();
-        let s = &self.tracer.settings;
-        render_time_sampled(&self.tracer, &scenes, frame, s.spp, s.seed, progress)
+        self.integrator.render_shutter(&scenes, frame, progress)
     }
 }
 
@@ -163,6 +220,97 @@ pub fn render_time_sampled<E: RadianceEstimator>(
         film.merge_tile(tile, *x0, *y0);
         stats += *s;
         invalid += inv;
+    }
+    RenderedFrame {
+        width: w,
+        height: h,
+        pixels: film.pixels(),
+        variance: film.variance_of_mean(),
+        stats,
+        invalid_samples: invalid,
+    }
+}
+
+/// [`render_with_splats`](crate::integrator::render_with_splats) over a shutter: in pass
+/// `s`, every pixel's sample draws its instant (the dimension after its raster position)
+/// and runs in that instant's scene; its splats land where that instant's camera sees
+/// them. A pixel's pass value is its own estimate plus the splats it receives from every
+/// pixel's sample of the pass, each at its own instant: since every pixel's instant is
+/// uniform over the T instants, the expectation is the time average (midpoint rule) of the
+/// per-instant images. Tiles in parallel, splats merged in tile order: bit-identical for
+/// any thread count.
+pub fn render_with_splats_time_sampled<E: SplattingEstimator>(
+    est: &E,
+    scenes: &[FrameScene],
+    frame: u32,
+    spp: u32,
+    seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderedFrame {
+    assert!(!scenes.is_empty(), "no scene in the shutter interval");
+    let cam0 = &scenes[0].camera;
+    let (w, h) = (cam0.width, cam0.height);
+    let tiles_x = w.div_ceil(TILE);
+    let n_tiles = (tiles_x * h.div_ceil(TILE)) as usize;
+    let n = scenes.len();
+    let mut film = Film::new(w, h);
+    let mut stats = Stats::default();
+    let mut invalid = 0u64;
+    let mut pass = vec![Rgb::ZERO; (w * h) as usize];
+    for s in 0..spp {
+        let results = parallel::map_chunks(n_tiles, 1, |range| {
+            let (x0, y0, tw, th) = tile_rect(range.start as u32, tiles_x, TILE, w, h);
+            let mut own = Vec::with_capacity((tw * th) as usize);
+            let mut splats = Vec::new();
+            let mut stats = Stats::default();
+            let mut invalid = 0u64;
+            for y in 0..th {
+                for x in 0..tw {
+                    let (px, py) = (x0 + x, y0 + y);
+                    let mut sampler = PixelSampler::new(seed, frame, px, py);
+                    sampler.start_sample(s);
+                    let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
+                    let scene = &scenes[instant_of(sampler.next_1d(), n)];
+                    let l = est.sample(scene, raster, &mut sampler, &mut stats, &mut splats);
+                    stats.samples += 1;
+                    own.push(if l.is_finite() {
+                        l
+                    } else {
+                        invalid += 1;
+                        Rgb::ZERO
+                    });
+                }
+            }
+            let np = (tw * th) as u64;
+            progress(np * (s as u64 + 1) / spp as u64 - np * s as u64 / spp as u64);
+            (x0, y0, tw, th, own, splats, stats, invalid)
+        });
+        for (x0, y0, tw, th, own, _, st, inv) in &results {
+            for y in 0..*th {
+                for x in 0..*tw {
+                    pass[((y0 + y) * w + x0 + x) as usize] = own[(y * tw + x) as usize];
+                }
+            }
+            stats += *st;
+            invalid += inv;
+        }
+        for (.., splats, _, _) in &results {
+            for (r, v) in splats {
+                if !v.is_finite() {
+                    invalid += 1;
+                    continue;
+                }
+                let (x, y) = (r.x as u32, r.y as u32);
+                if r.x >= 0.0 && r.y >= 0.0 && x < w && y < h {
+                    pass[(y * w + x) as usize] += *v;
+                }
+            }
+        }
+        for y in 0..h {
+            for x in 0..w {
+                film.add(x, y, pass[(y * w + x) as usize], 1.0);
+            }
+        }
     }
     RenderedFrame {
         width: w,

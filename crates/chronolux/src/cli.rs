@@ -89,8 +89,8 @@ pub struct RenderArgs {
     #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept"])]
     pub method: String,
     /// Motion blur: fraction of the frame interval the shutter is open, in [0, 1], centred
-    /// on the frame time (Blender's default); 0 = no motion blur. `path` only: each pixel
-    /// sample gets a time in the shutter, the scene is built at min(spp, 16) instants.
+    /// on the frame time (Blender's default); 0 = no motion blur. `path` and `bdpt`: each
+    /// pixel sample gets a time in the shutter, the scene is built at min(spp, 16) instants.
     #[arg(
         long,
         default_value_t = 0.0,

@@ -116,9 +116,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bail!("--exposure must be a finite number of stops");
     }
     chronolux_render::motion_blur::check_shutter(args.shutter).map_err(anyhow::Error::msg)?;
-    if args.shutter > 0.0 && args.method != "path" {
+    if args.shutter > 0.0 && args.method != "path" && args.method != "bdpt" {
         bail!(
-            "--shutter (motion blur) is implemented for --method path only, not {}",
+            "--shutter (motion blur) is implemented for --method path and bdpt, not {}",
             args.method
         );
     }
@@ -217,8 +217,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let mut renderer: Box<dyn chronolux_render::sequence::SequenceRenderer + Send> = match &config {
         TechniqueConfig::Path(s) if args.shutter > 0.0 => {
-            Box::new(chronolux_render::motion_blur::MotionBlurPath::new(
+            Box::new(chronolux_render::motion_blur::MotionBlur::new(
                 chronolux_render::pt::PathTracer::new(s.clone()),
+                args.shutter,
+            ))
+        }
+        TechniqueConfig::Bdpt(s) if args.shutter > 0.0 => {
+            Box::new(chronolux_render::motion_blur::MotionBlur::new(
+                chronolux_render::bdpt::Bdpt::new(s.clone()),
                 args.shutter,
             ))
         }

@@ -1,4 +1,5 @@
-//! `--shutter`: motion blur of the path tracer, recorded in run.json, with clear errors.
+//! `--shutter`: motion blur of the path tracer and BDPT, recorded in run.json, with clear
+//! errors.
 
 use crate::common::*;
 
@@ -23,8 +24,8 @@ fn shutter_out_of_range_or_with_another_method_is_an_error() {
         fails(&render(&dir, &["--shutter", s]), &["--shutter", "[0, 1]"]);
     }
     fails(
-        &render(&dir, &["--shutter", "0.5", "--method", "bdpt"]),
-        &["--shutter", "path"],
+        &render(&dir, &["--shutter", "0.5", "--method", "dept"]),
+        &["--shutter", "path", "bdpt"],
     );
 }
 
@@ -43,4 +44,7 @@ fn shutter_blurs_the_demo_and_is_recorded() {
     assert_eq!(manifest(&sharp)["settings"]["shutter"], 0.0);
     // The demo's block moves at frame 12: the blurred frame differs.
     assert_ne!(frame(&sharp), frame(&open));
+    let bdpt = temp_dir("shutter-bdpt");
+    ok(&render(&bdpt, &["--shutter", "0.5", "--method", "bdpt"]));
+    assert_eq!(manifest(&bdpt)["settings"]["shutter"], 0.5);
 }

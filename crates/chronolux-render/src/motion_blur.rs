@@ -9,13 +9,16 @@
 //! raster dimensions — and is traced in the scene of sub-interval `⌊u·T⌋`. One dimension
 //! of Owen-scrambled Sobol points is stratified over any aligned power-of-two block of
 //! sample indices, so when `T` divides a power-of-two `spp` every instant gets exactly
-//! `spp / T` samples of every pixel (otherwise as evenly as the sequence allows).
+//! `spp / T` samples of every pixel (otherwise as evenly as the sequence allows). The T
+//! scenes of a frame are held together while it renders (T times the memory of one
+//! frame's scene and acceleration structure, built T times per frame).
 //!
 //! **Discretisation error.** The estimate converges to the midpoint rule
 //! `(1/T) Σ_j I(t_j)` instead of the shutter integral `(1/Δ) ∫ I(t) dt` of the pixel value
-//! `I(t)`. On each sub-interval the midpoint rule is exact for `I` linear in time; for a
-//! monotone `I` its error is at most half the variation over the sub-interval, so the
-//! per-pixel error is at most `TV(I) / (2T)`, `TV` the total variation of the pixel value
+//! `I(t)`. On each sub-interval of width h the midpoint rule is exact for `I` linear in
+//! time, and its error is at most (h/2) × the variation of `I` over the sub-interval
+//! (|I(t) − I(mid)| is at most the variation between t and mid), so the per-pixel error of
+//! the average is at most `TV(I) / (2T)`, `TV` the total variation of the pixel value
 //! across the shutter (for an edge of contrast C crossing the pixel once, `C / (2T)`). In
 //! image terms a moving edge is drawn at `T` positions `v·S/T` pixels apart: while that
 //! spacing is at most a pixel the box pixel filter makes `I(t)` piecewise linear and the

@@ -24,8 +24,8 @@
 //!
 //! **Memory bound**: the accumulation tiles held in memory never exceed
 //! `max(budget, one tile)`, plus one tile while [`WindowFilm::finish`] reads a spilled tile
-//! back — so at most `budget + 64·64·28 B` (114 688 B) whatever the resolution and the
-//! number of frames. Not counted: the per-frame tile tables (a few bytes per tile), the
+//! back — so at most `budget + 64·64·28 B` (114 688 B) for a budget of at least one tile,
+//! whatever the resolution, the window and the number of frames. Not counted: the per-frame tile tables (a few bytes per tile), the
 //! caller's batch, and the two full-frame vectors `finish` returns (16 B per pixel, owned
 //! by the caller).
 //!

@@ -85,9 +85,14 @@ pub struct RenderArgs {
     /// `bdpt`: bidirectional path tracing, frame by frame; `dept`, `dept-spatial`,
     /// `dept-bilateral`: photon density estimation on mesh elements, frame by frame (no,
     /// Gaussian, bilateral spatial filter); `spacetime-dept`: photons shared over a
-    /// per-element temporal window with a bilateral filter.
-    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept"])]
+    /// per-element temporal window with a bilateral filter; `stbpt`: bidirectional samples
+    /// reused over the frames of a window (see --window).
+    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept", "stbpt"])]
     pub method: String,
+    /// `stbpt` only: each sample serves the frames f-K..f+K of the one it was made for
+    /// (0 to 31). Default 4.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=31))]
+    pub window: Option<u32>,
     /// Photons per frame of the photon methods (`dept`, `dept-spatial`, `dept-bilateral`;
     /// for `spacetime-dept` the per-frame budget, before pooling over frames): a count
     /// (e.g. 250000), or `auto` for the stopping rule, which shoots batches until the

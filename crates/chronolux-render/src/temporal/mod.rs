@@ -7,4 +7,5 @@
 //!   in one frame and reused in its neighbours).
 
 pub mod spacetime_dept;
+pub mod stbpt;
 pub mod window_film;

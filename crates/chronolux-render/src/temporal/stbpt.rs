@@ -517,6 +517,12 @@ impl Generation<'_> {
             reproduced(self.mfa, scene_f, cam, &sc.cam_rays, 1, jf, st)
                 & light_valid
                 & self.materials_same
+        } else if n > 1 && !sc.cam_rays.is_empty() {
+            // An escaped camera ray: its value (the environment, or nothing) is reused
+            // where the same ray escapes too.
+            reproduced(self.mfa, scene_f, cam, &sc.cam_rays[..1], 0, jf, st)
+                & self.lights_same
+                & self.materials_same
         } else {
             1 << jf
         };
@@ -551,12 +557,15 @@ impl Generation<'_> {
                 let Some(c) = c else { continue };
                 let l = c.contribution.l;
                 let x1v = &cam[1];
-                let sv = x1v.surface.as_ref().expect("t ≥ 2: x1 is a surface");
                 if s == 0 && t == 2 {
                     let w = mis_weight(scene_f, self.bdpt, light, cam, None, 0, 2);
                     emission = Some((l, w));
                     continue;
                 }
+                let sv = x1v
+                    .surface
+                    .as_ref()
+                    .expect("strategies other than (0, 2) need x1 on a surface");
                 let wi = if t == 2 {
                     (c.light_point.expect("s ≥ 1") - x1v.p).normalize_or_zero()
                 } else {
@@ -622,11 +631,15 @@ impl Generation<'_> {
             let eye = cam_g.position();
             let landing: Option<(Vec2, bool)> = match x1 {
                 None => {
-                    // Escaped camera ray (or an environment vertex): its direction.
+                    // Escaped camera ray (or an environment vertex): lands where its
+                    // direction projects; reused when g's camera is f's and the ray
+                    // escapes in g too (then g's camera ray is the same ray).
+                    let same_camera =
+                        cam_g.world_from_camera == scene_f.camera.world_from_camera;
                     sc.cam_rays
                         .first()
                         .and_then(|r| cam_g.project(eye + r.d.normalize()))
-                        .map(|r| (r, false))
+                        .map(|r| (r, same_camera && cam_valid >> j & 1 == 1))
                 }
                 Some(v) => {
                     let sv = v.surface.as_ref().unwrap();
@@ -683,7 +696,10 @@ impl Generation<'_> {
             let gw = cam_g.width;
             let pixel_g =
                 (raster_g.y as u32).min(cam_g.height - 1) * gw + (raster_g.x as u32).min(gw - 1);
-            let value = if reuse {
+            let value = if reuse && x1.is_none() {
+                out.counts.reused[j] += 1;
+                own
+            } else if reuse {
                 let v = x1.unwrap();
                 let sv = v.surface.as_ref().unwrap();
                 let wo_g = (eye - v.p).normalize_or_zero();

@@ -8,6 +8,7 @@ mod furnace;
 mod multi_frame;
 mod peer;
 mod photon;
+mod stbpt;
 
 use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};

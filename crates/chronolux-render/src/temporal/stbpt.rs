@@ -634,8 +634,7 @@ impl Generation<'_> {
                     // Escaped camera ray (or an environment vertex): lands where its
                     // direction projects; reused when g's camera is f's and the ray
                     // escapes in g too (then g's camera ray is the same ray).
-                    let same_camera =
-                        cam_g.world_from_camera == scene_f.camera.world_from_camera;
+                    let same_camera = cam_g.world_from_camera == scene_f.camera.world_from_camera;
                     sc.cam_rays
                         .first()
                         .and_then(|r| cam_g.project(eye + r.d.normalize()))

@@ -677,10 +677,9 @@ impl Generation<'_> {
                                         && lo.alpha < NEAR_SPECULAR_ALPHA
                                 };
                                 let camera_moved = eye != scene_f.camera.position();
-                                let reuse = !moved
-                                    && !v.delta
-                                    && !(near_specular && camera_moved)
-                                    && cam_valid >> j & 1 == 1;
+                                let valid = cam_valid >> j & 1 == 1;
+                                let view_safe = !(near_specular && camera_moved);
+                                let reuse = valid && view_safe && !moved && !v.delta;
                                 Some((r, reuse))
                             }
                         }

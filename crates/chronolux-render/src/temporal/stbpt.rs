@@ -197,6 +197,7 @@ pub struct Stbpt {
     /// Mean number of frames served by the samples generated for each frame.
     served: BTreeMap<u32, f64>,
     last: Option<ReuseStats>,
+    last_output: Option<u32>,
 }
 
 impl Stbpt {
@@ -210,6 +211,7 @@ impl Stbpt {
             pending: BTreeMap::new(),
             served: BTreeMap::new(),
             last: None,
+            last_output: None,
         }
     }
 
@@ -842,10 +844,15 @@ impl SequenceRenderer for Stbpt {
         let k = self.k();
         source.reserve(2 * k as usize + 2);
         let list = source.frames().to_vec();
-        // A frame outside the render list (or requested out of order) starts over.
-        if !list.contains(&frame) || self.next > 0 && list[self.next - 1] > frame + k {
-            self.next = list.partition_point(|&g| g + k < frame);
+        // Frames come in increasing order; a request for an earlier frame starts over
+        // (the open frames are dropped, the samples regenerated).
+        if self.last_output.is_some_and(|l| frame <= l) {
+            *self = Stbpt::new(self.settings.clone());
         }
+        if self.next == 0 {
+            self.next = list.partition_point(|&g| g.saturating_add(k) < frame);
+        }
+        self.last_output = Some(frame);
         while self.next < list.len() && list[self.next] <= frame.saturating_add(k) {
             let f = list[self.next];
             self.generate(source, f, progress);

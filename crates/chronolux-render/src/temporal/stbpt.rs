@@ -51,7 +51,10 @@
 //! 4. **Light tracing** (t = 1): every light subpath of the window serves g: reused when
 //!    its segments are reproduced in g and the lights are the same, otherwise re-generated
 //!    in g from the same light stream; its vertices are connected to g's camera and
-//!    splatted. Frame g's splats are scaled by 1 / (spp × frames of g's window).
+//!    splatted. When g's camera is f's and the light subpath is reused, the connections
+//!    are the same too: f's splats are reused, each where its shadow ray (answered for
+//!    the window at generation) is unoccluded in g. Frame g's splats are scaled by
+//!    1 / (spp × frames of g's window).
 //!
 //! Pixel value of g: Σ values / Σ landed samples per pixel ([`WindowFilm`]), plus the
 //! scaled splats.
@@ -353,6 +356,8 @@ struct Scratch {
     light_g: Vec<Vertex>,
     cam_g: Vec<Vertex>,
     entries: Vec<Entry>,
+    /// Frame f's light-tracing splats: (pixel, value, frames where unoccluded).
+    splats: Vec<(u32, Rgb, FrameMask)>,
 }
 
 /// Read-only state of one generated frame.
@@ -366,6 +371,8 @@ struct Generation<'a> {
     /// Frames whose lights (and materials) equal f's.
     lights_same: FrameMask,
     materials_same: FrameMask,
+    /// Frames whose camera is f's (same placement, projection and image size).
+    same_camera: FrameMask,
 }
 
 /// Output of one tile of one pass.
@@ -378,7 +385,9 @@ struct TileOut {
 }
 
 impl Generation<'_> {
-    /// The t = 1 strategies of `light` in frame `j`, splatted into `out`.
+    /// The t = 1 strategies of `light` in frame `j`, splatted into `out`. With `record`
+    /// (frame f only), shadow rays are answered for the whole window and every splat is
+    /// recorded with the frames it is unoccluded in, for the frames that share f's camera.
     #[allow(clippy::too_many_arguments)] // reason: the subpaths, the frame and the outputs
     fn light_trace(
         &self,
@@ -388,27 +397,50 @@ impl Generation<'_> {
         conn: &PixelSampler,
         out: &mut TileOut,
         invalid: &mut u64,
+        mut record: Option<&mut Vec<(u32, Rgb, FrameMask)>>,
     ) {
         let scene = &self.scenes[j];
         let (w, h) = (scene.camera.width, scene.camera.height);
         let max_segments = self.bdpt.depth() as usize;
         let mut sampler = conn.clone();
+        let all = self.mfa.all_frames();
         for s in 2..=light.len() {
             if s > max_segments {
                 break;
             }
-            let Some(c) = connect(
-                scene,
-                self.bdpt,
-                light,
-                camera,
-                s,
-                1,
-                &mut sampler,
-                &mut out.stats[j],
-            ) else {
-                continue;
+            let mut vis: FrameMask = 1 << j;
+            let c = if record.is_some() {
+                connect_with(
+                    scene,
+                    self.bdpt,
+                    light,
+                    camera,
+                    s,
+                    1,
+                    &mut sampler,
+                    &mut out.stats[j],
+                    &mut |r| {
+                        vis = all
+                            & !self
+                                .mfa
+                                .occluded_window(r, all, |a, b1, b2| scene.accept(a, b1, b2));
+                        vis != 0
+                    },
+                )
+                .map(|c| c.contribution)
+            } else {
+                connect(
+                    scene,
+                    self.bdpt,
+                    light,
+                    camera,
+                    s,
+                    1,
+                    &mut sampler,
+                    &mut out.stats[j],
+                )
             };
+            let Some(c) = c else { continue };
             let Some(r) = c.raster else { continue };
             if !c.l.is_finite() {
                 *invalid += 1;
@@ -416,13 +448,18 @@ impl Generation<'_> {
             }
             let (x, y) = (r.x as u32, r.y as u32);
             if r.x >= 0.0 && r.y >= 0.0 && x < w && y < h {
-                out.splats.push(Contribution {
-                    frame: self.frames[j],
-                    pixel: y * w + x,
-                    value: c.l,
-                    weight: 0.0,
-                    splat: true,
-                });
+                if let Some(rec) = record.as_deref_mut() {
+                    rec.push((y * w + x, c.l, vis));
+                }
+                if vis >> j & 1 == 1 {
+                    out.splats.push(Contribution {
+                        frame: self.frames[j],
+                        pixel: y * w + x,
+                        value: c.l,
+                        weight: 0.0,
+                        splat: true,
+                    });
+                }
             }
         }
     }
@@ -600,7 +637,9 @@ impl Generation<'_> {
             Self::land(out, f, pixel, Rgb::ZERO);
         }
         out.counts.landed[jf] += 1;
-        self.light_trace(jf, light, cam, &ns, out, &mut inv);
+        sc.splats.clear();
+        let record = (n > 1).then_some(&mut sc.splats);
+        self.light_trace(jf, light, cam, &ns, out, &mut inv, record);
         out.counts.invalid[jf] += inv;
 
         // Other frames of the window.
@@ -621,8 +660,23 @@ impl Generation<'_> {
                     &mut out.stats[j],
                 );
             }
-            let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
-            self.light_trace(j, light_g, cam, &ns, out, &mut inv);
+            if light_ok && self.same_camera >> j & 1 == 1 {
+                // Same light subpath, same camera: the same splats, where unoccluded in g.
+                for &(pixel, value, vis) in &sc.splats {
+                    if vis >> j & 1 == 1 {
+                        out.splats.push(Contribution {
+                            frame: frame_g,
+                            pixel,
+                            value,
+                            weight: 0.0,
+                            splat: true,
+                        });
+                    }
+                }
+            } else {
+                let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
+                self.light_trace(j, light_g, cam, &ns, out, &mut inv, None);
+            }
 
             // Camera part: where does the sample land in g?
             let cam_g = &scene_g.camera;
@@ -763,7 +817,14 @@ impl Stbpt {
                 materials_same |= 1 << j;
             }
         }
+        let cam_key = |s: &FrameScene| format!("{:?}", s.camera);
+        let same_camera = scenes
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| cam_key(s) == cam_key(&scenes[jf]))
+            .fold(0, |m, (j, _)| m | 1 << j);
         let gen_ = Generation {
+            same_camera,
             bdpt: &self.settings.bdpt,
             frames: &frames,
             scenes: &scenes,

@@ -5,6 +5,7 @@ use crate::dept::{Dept, DeptSequence, DeptSettings};
 use crate::pt::{PathSettings, PathTracer};
 use crate::sequence::{FrameByFrame, SequenceRenderer};
 use crate::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
+use crate::temporal::stbpt::{Stbpt, StbptSettings};
 
 /// Techniques selectable with `--method`.
 pub const METHODS: &[(&str, &str)] = &[
@@ -29,6 +30,10 @@ pub const METHODS: &[(&str, &str)] = &[
         "photon density estimation on mesh elements, spatial bilateral filter",
     ),
     (
+        "stbpt",
+        "spatio-temporal BDPT: each sample reused in the frames of a window [f-K, f+K]",
+    ),
+    (
         "spacetime-dept",
         "photon density estimation on mesh elements, space-time window + bilateral filter",
     ),
@@ -44,6 +49,7 @@ pub enum TechniqueConfig {
     DeptSpatial(DeptSettings),
     DeptBilateral(DeptSettings),
     SpacetimeDept(SpacetimeSettings),
+    Stbpt(StbptSettings),
 }
 
 impl TechniqueConfig {
@@ -65,6 +71,7 @@ impl TechniqueConfig {
                 Box::new(DeptSequence::new(Dept::new(s.clone()), "dept-bilateral"))
             }
             TechniqueConfig::SpacetimeDept(s) => Box::new(SpacetimeDept::new(s.clone())),
+            TechniqueConfig::Stbpt(s) => Box::new(Stbpt::new(s.clone())),
         }
     }
 }

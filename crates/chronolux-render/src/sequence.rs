@@ -22,6 +22,28 @@ pub trait SequenceRenderer {
     fn photons_last_frame(&self) -> Option<u64> {
         None
     }
+
+    /// Sample reuse of the frame last rendered (sample-reusing methods; `None` otherwise).
+    fn reuse_last_frame(&self) -> Option<ReuseStats> {
+        None
+    }
+}
+
+/// How much a frame of a sample-reusing technique got from its window.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ReuseStats {
+    /// Frames of the render list in the frame's window (generated frames that served it).
+    pub window: u32,
+    /// Samples that landed in the frame, per pixel (its own and its neighbours').
+    pub effective_spp: f64,
+    /// Samples from other frames served by reusing their view-independent part / by
+    /// re-tracing them in this frame.
+    pub reused: u64,
+    pub retraced: u64,
+    /// Mean number of frames served by each sample generated for this frame.
+    pub reuse_factor: f64,
+    /// Light subpaths whose splats this frame received, per pixel.
+    pub light_subpaths_per_pixel: f64,
 }
 
 /// Every frame rendered from scratch by a single-frame integrator.

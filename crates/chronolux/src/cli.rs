@@ -85,8 +85,9 @@ pub struct RenderArgs {
     /// `bdpt`: bidirectional path tracing, frame by frame; `dept`, `dept-spatial`,
     /// `dept-bilateral`: photon density estimation on mesh elements, frame by frame (no,
     /// Gaussian, bilateral spatial filter); `spacetime-dept`: photons shared over a
-    /// per-element temporal window with a bilateral filter.
-    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept"])]
+    /// per-element temporal window with a bilateral filter; `stbpt`: bidirectional samples
+    /// reused over the frames of a window (see --window).
+    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept", "stbpt"])]
     pub method: String,
     /// Motion blur: fraction of the frame interval the shutter is open, in [0, 1], centred
     /// on the frame time (Blender's default); 0 = no motion blur. `path` and `bdpt`: each
@@ -98,6 +99,10 @@ pub struct RenderArgs {
         allow_negative_numbers = true
     )]
     pub shutter: f32,
+    /// `stbpt` only: each sample serves the frames f-K..f+K of the one it was made for
+    /// (0 to 31). Default 4.
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=31))]
+    pub window: Option<u32>,
     /// Photons per frame of the photon methods (`dept`, `dept-spatial`, `dept-bilateral`;
     /// for `spacetime-dept` the per-frame budget, before pooling over frames): a count
     /// (e.g. 250000), or `auto` for the stopping rule, which shoots batches until the

@@ -185,6 +185,16 @@ pub fn config_for(
             seed,
             ..Default::default()
         }),
+        // Samples generated per pixel and frame; each serves up to 2K + 1 frames.
+        "stbpt" => TechniqueConfig::Stbpt(chronolux_render::temporal::stbpt::StbptSettings {
+            bdpt: chronolux_render::bdpt::BdptSettings {
+                spp: effort,
+                max_depth,
+                seed,
+                ..Default::default()
+            },
+            ..Default::default()
+        }),
         // Photon methods: effort = thousands of photons per frame (the per-frame budget
         // for spacetime-dept); camera samples stay at the method's default.
         "dept" | "dept-spatial" | "dept-bilateral" => {
@@ -210,7 +220,7 @@ pub fn config_for(
             ..Default::default()
         }),
         m => bail!(
-            "bench quality does not know how to scale the effort of method '{m}' (known: path, bdpt, dept, dept-spatial, dept-bilateral, spacetime-dept)"
+            "bench quality does not know how to scale the effort of method '{m}' (known: path, bdpt, stbpt, dept, dept-spatial, dept-bilateral, spacetime-dept)"
         ),
     })
 }

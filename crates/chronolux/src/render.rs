@@ -167,6 +167,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
         Some(p) => Some(p.parse().map_err(anyhow::Error::msg)?),
     };
+    if args.window.is_some() && args.method != "stbpt" {
+        bail!("--window applies to --method stbpt only");
+    }
     let sink = FrameSink::create(&args.output)?;
     let config = match args.method.as_str() {
         "path" => TechniqueConfig::Path(PathSettings {
@@ -180,6 +183,15 @@ pub fn run(args: RenderArgs) -> Result<()> {
             max_depth: args.max_depth,
             seed: args.seed,
             ..Default::default()
+        }),
+        "stbpt" => TechniqueConfig::Stbpt(chronolux_render::temporal::stbpt::StbptSettings {
+            bdpt: chronolux_render::bdpt::BdptSettings {
+                spp: args.spp,
+                max_depth: args.max_depth,
+                seed: args.seed,
+                ..Default::default()
+            },
+            window: args.window.unwrap_or(4),
         }),
         "dept" => TechniqueConfig::Dept(
             chronolux_render::dept::DeptSettings {
@@ -336,6 +348,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
                     "samples": out.stats.samples,
                     "invalid_samples": out.invalid_samples,
                     "photons": renderer.photons_last_frame(),
+                    "reuse": renderer.reuse_last_frame(),
                     "build": source.last_build,
                 }),
             );

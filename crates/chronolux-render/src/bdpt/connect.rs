@@ -47,6 +47,45 @@ pub fn connect(
     sampler: &mut PixelSampler,
     stats: &mut Stats,
 ) -> Option<Contribution> {
+    connect_with(
+        scene,
+        settings,
+        light,
+        camera,
+        s,
+        t,
+        sampler,
+        stats,
+        &mut |r| !scene.occluded(r),
+    )
+    .map(|c| c.contribution)
+}
+
+/// A strategy's contribution as [`connect_with`] reports it.
+#[derive(Clone, Copy, Debug)]
+pub struct Connection {
+    pub contribution: Contribution,
+    /// The light-side endpoint of the connection (light vertex s − 1, or the light point
+    /// sampled for s = 1); `None` for s = 0.
+    pub light_point: Option<chronolux_core::math::Vec3>,
+}
+
+/// [`connect`] with the visibility test of the connection's shadow ray left to `visible`
+/// (called at most once, only when the unoccluded contribution is non-zero; the
+/// contribution is returned iff it answers true). A technique answering the shadow ray for
+/// several frames at once (sample reuse) passes a closure that records the answer.
+#[allow(clippy::too_many_arguments)] // reason: connect's arguments and the visibility oracle
+pub fn connect_with(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    light: &[Vertex],
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    sampler: &mut PixelSampler,
+    stats: &mut Stats,
+    visible: &mut dyn FnMut(&chronolux_core::geometry::Ray) -> bool,
+) -> Option<Connection> {
     if t == 0 || t > camera.len() || s > light.len() {
         return None;
     }
@@ -77,7 +116,7 @@ pub fn connect(
             return None;
         }
         stats.shadow_rays += 1;
-        if scene.occluded(&spawn_ray_to(qs.p, qs.ng, cs.p, v.ng)) {
+        if !visible(&spawn_ray_to(qs.p, qs.ng, cs.p, v.ng)) {
             return None;
         }
         raster = Some(cs.raster);
@@ -107,7 +146,7 @@ pub fn connect(
             return None;
         }
         stats.shadow_rays += 1;
-        if scene.occluded(&spawn_ray_to(pt.p, pt.ng, ls.p, ls.n)) {
+        if !visible(&spawn_ray_to(pt.p, pt.ng, ls.p, ls.n)) {
             return None;
         }
         sampled = Some(v);
@@ -124,7 +163,7 @@ pub fn connect(
         if l == Rgb::ZERO {
             return None;
         }
-        let gt = g(scene, qs, pt, stats);
+        let gt = g(qs, pt, stats, visible);
         if gt == 0.0 {
             return None;
         }
@@ -134,7 +173,15 @@ pub fn connect(
         return None;
     }
     let w = mis_weight(scene, settings, light, camera, sampled.as_ref(), s, t);
-    Some(Contribution { l: l * w, raster })
+    let light_point = match s {
+        0 => None,
+        1 if t > 1 => sampled.as_ref().map(|v| v.p),
+        _ => Some(light[s - 1].p),
+    };
+    Some(Connection {
+        contribution: Contribution { l: l * w, raster },
+        light_point,
+    })
 }
 
 /// MIS weight of strategy (s, t) for the path it built, by the ratio trick over reversed

@@ -30,7 +30,7 @@ use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::desc::Projection;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
-pub use connect::{Contribution, connect, mis_weight};
+pub use connect::{Connection, Contribution, connect, connect_with, mis_weight};
 pub use vertex::{Vertex, VertexKind};
 
 /// MIS heuristic over the strategies of a path length.
@@ -99,6 +99,7 @@ fn random_walk(
     sampler: &mut PixelSampler,
     path: &mut Vec<Vertex>,
     stats: &mut Stats,
+    mut rays: Option<&mut Vec<Ray>>,
 ) {
     if max_vertices == 0 {
         return;
@@ -110,6 +111,9 @@ fn random_walk(
     let mut eta_scale = 1.0f32;
     loop {
         stats.rays += 1;
+        if let Some(r) = rays.as_deref_mut() {
+            r.push(ray);
+        }
         let prev = path.last().expect("a walk starts at an endpoint");
         let Some(hit) = scene.intersect(&ray) else {
             if mode == TransportMode::Radiance && scene.environment.is_some() {
@@ -199,6 +203,25 @@ pub fn generate_camera_subpath(
     path: &mut Vec<Vertex>,
     stats: &mut Stats,
 ) {
+    generate_camera_subpath_traced(scene, settings, raster, sampler, path, stats, None);
+}
+
+/// [`generate_camera_subpath`], also recording in `rays` (cleared) every ray the walk
+/// traced, in order: ray `k` leaves vertex `k`; it reached vertex `k + 1` when that is a
+/// surface vertex, else it escaped the scene (the sample-reusing technique checks each
+/// segment, escapes included, against other frames' geometry).
+pub fn generate_camera_subpath_traced(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    raster: Vec2,
+    sampler: &mut PixelSampler,
+    path: &mut Vec<Vertex>,
+    stats: &mut Stats,
+    mut rays: Option<&mut Vec<Ray>>,
+) {
+    if let Some(r) = rays.as_deref_mut() {
+        r.clear();
+    }
     path.clear();
     let max_depth = settings.depth();
     if max_depth == 0 {
@@ -220,6 +243,7 @@ pub fn generate_camera_subpath(
         sampler,
         path,
         stats,
+        rays,
     );
 }
 
@@ -240,6 +264,22 @@ pub fn generate_light_subpath(
     path: &mut Vec<Vertex>,
     stats: &mut Stats,
 ) {
+    generate_light_subpath_traced(scene, settings, sampler, path, stats, None);
+}
+
+/// [`generate_light_subpath`], also recording the traced rays in `rays` (cleared), as
+/// [`generate_camera_subpath_traced`] does.
+pub fn generate_light_subpath_traced(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    sampler: &mut PixelSampler,
+    path: &mut Vec<Vertex>,
+    stats: &mut Stats,
+    mut rays: Option<&mut Vec<Ray>>,
+) {
+    if let Some(r) = rays.as_deref_mut() {
+        r.clear();
+    }
     path.clear();
     let u_light = sampler.next_1d();
     let u_pos = sampler.next_2d();
@@ -286,6 +326,7 @@ pub fn generate_light_subpath(
         sampler,
         path,
         stats,
+        rays,
     );
     if infinite {
         if path.len() > 1 {

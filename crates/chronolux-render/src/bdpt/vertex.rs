@@ -300,7 +300,13 @@ pub fn infinite_light_density(scene: &FrameScene) -> f32 {
 
 /// Geometry term between two vertices, with visibility: |cos|·|cos|/d² (cosines only at
 /// surface vertices, shading normals as the BSDF's frame).
-pub fn g(scene: &FrameScene, v0: &Vertex, v1: &Vertex, stats: &mut Stats) -> f32 {
+/// `visible` answers the shadow ray.
+pub fn g(
+    v0: &Vertex,
+    v1: &Vertex,
+    stats: &mut Stats,
+    visible: &mut dyn FnMut(&chronolux_core::geometry::Ray) -> bool,
+) -> f32 {
     let d = v0.p - v1.p;
     let d2 = d.length_squared();
     if d2 == 0.0 {
@@ -318,10 +324,10 @@ pub fn g(scene: &FrameScene, v0: &Vertex, v1: &Vertex, stats: &mut Stats) -> f32
         return 0.0;
     }
     stats.shadow_rays += 1;
-    if scene.occluded(&spawn_ray_to(v0.p, v0.ng, v1.p, v1.ng)) {
-        0.0
-    } else {
+    if visible(&spawn_ray_to(v0.p, v0.ng, v1.p, v1.ng)) {
         g
+    } else {
+        0.0
     }
 }
 

@@ -9,4 +9,5 @@
 
 pub mod blur;
 pub mod spacetime_dept;
+pub mod stbpt;
 pub mod window_film;

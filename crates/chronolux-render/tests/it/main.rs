@@ -9,6 +9,7 @@ mod furnace;
 mod multi_frame;
 mod peer;
 mod photon;
+mod stbpt;
 mod window_film;
 
 use chronolux_core::scene::desc::SceneDesc;

@@ -92,6 +92,8 @@ pub struct RenderArgs {
     /// Motion blur: fraction of the frame interval the shutter is open, in [0, 1], centred
     /// on the frame time (Blender's default); 0 = no motion blur. `path` and `bdpt`: each
     /// pixel sample gets a time in the shutter, the scene is built at min(spp, 16) instants.
+    /// `stbpt`: each sample's trajectory across the shutter (its point in the neighbouring
+    /// frames) is splatted over the pixels it crosses.
     #[arg(
         long,
         default_value_t = 0.0,

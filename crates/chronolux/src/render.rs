@@ -116,9 +116,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
         bail!("--exposure must be a finite number of stops");
     }
     chronolux_render::motion_blur::check_shutter(args.shutter).map_err(anyhow::Error::msg)?;
-    if args.shutter > 0.0 && args.method != "path" && args.method != "bdpt" {
+    if args.shutter > 0.0 && !["path", "bdpt", "stbpt"].contains(&args.method.as_str()) {
         bail!(
-            "--shutter (motion blur) is implemented for --method path and bdpt, not {}",
+            "--shutter (motion blur) is implemented for --method path, bdpt and stbpt, not {}",
             args.method
         );
     }
@@ -192,6 +192,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 ..Default::default()
             },
             window: args.window.unwrap_or(4),
+            shutter: args.shutter,
+            ..Default::default()
         }),
         "dept" => TechniqueConfig::Dept(
             chronolux_render::dept::DeptSettings {

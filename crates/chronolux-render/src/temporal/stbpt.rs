@@ -85,6 +85,38 @@
 //! change in the light-tracing weight between the two views, small where light tracing
 //! carries little (it is largest on caustics seen directly).
 //!
+//! # Motion blur (`shutter` > 0)
+//!
+//! Every landing also records where the point it shows is seen one frame before and one
+//! after (the sample's x1 moved with its object into those frames and projected by their
+//! cameras, visible or not; an escaped ray's direction for the background), and its value
+//! there when that landing shows the same point (own frame or reuse; a re-traced landing
+//! may show another point, so its radiance is not interpolated). Per pixel of frame g the
+//! films keep the means of these over the landed samples; when g is finished, each pixel's
+//! value is spread over the pixels its trajectory crosses during the shutter
+//! ([`splat_trajectory`], 2D DDA, weight ∝ time ∝ length at constant speed), positions and
+//! radiance linear in time between frames. **Deviation from a per-sample splat:** the
+//! trajectory is splatted per pixel of the reconstructed frame, not per sample, because
+//! a landed sample's share of its pixel (1 / samples landed there) is known only when the
+//! window is complete; splatting each sample as it lands would weight pixels by landing
+//! density (which doubles where the scene's motion brings samples of two frames onto the
+//! same point). Consequences: a pixel showing two differently moving surfaces spreads its
+//! mean along their mean trajectory; only points visible at the frame instant are spread,
+//! so background revealed during the shutter is missing from the blur (as in the paper);
+//! light-tracing splats are not blurred. Needs K ≥ 1 (the neighbouring frames); at the
+//! ends of the render list the trajectory is extrapolated from the frame on the other
+//! side. Test: a quad moving at constant speed against the analytic box⊗box blur
+//! (`tests/it/blur.rs`).
+//!
+//! # Memory
+//!
+//! Samples are not stored: each is made, landed in every frame of its window and
+//! dropped. What stays is the open frames' films (value, square, splat, and four motion
+//! films with motion blur) in [`WindowFilm`]s sharing `film_budget_mb` (tiles beyond it go
+//! to a disk cache), the 2K + 2 scenes of the frame source, and one batch of
+//! [`TILES_PER_BATCH`] tiles of contributions: bounded whatever the resolution and frame
+//! count.
+//!
 //! Orthographic cameras: samples serve only their own frame (the landing test needs a
 //! pinhole). The window holds at most [`MAX_WINDOW_FRAMES`] frames (K ≤ 31).
 
@@ -95,7 +127,8 @@ use crate::bdpt::{
 };
 use crate::integrator::{RenderedFrame, TILE};
 use crate::sequence::{ReuseStats, SequenceRenderer};
-use crate::temporal::window_film::{Contribution, WindowFilm};
+use crate::temporal::blur::{TrajectoryVertex, splat_trajectory};
+use crate::temporal::window_film::{Contribution, FilmStats, WindowFilm};
 use chronolux_core::accel::Hit;
 use chronolux_core::accel::multi_frame::{FrameMask, MAX_WINDOW_FRAMES, MultiFrameAccel};
 use chronolux_core::bsdf::TransportMode;
@@ -122,6 +155,19 @@ pub struct StbptSettings {
     /// Default 4.
     /// At most 31.
     pub window: u32,
+    /// Motion blur: fraction of the frame interval the shutter is open, centred on the
+    /// frame time (0 = off). Each landed sample's trajectory is splatted (see "Motion
+    /// blur" in the module doc). Default 0.
+    #[serde(default)]
+    pub shutter: f32,
+    /// Memory budget of the accumulation films in MiB (all open frames together); tiles
+    /// beyond it go to a disk cache ([`WindowFilm::with_budget`]). Default 512.
+    #[serde(default = "default_film_budget")]
+    pub film_budget_mb: u64,
+}
+
+fn default_film_budget() -> u64 {
+    512
 }
 
 impl Default for StbptSettings {
@@ -129,9 +175,17 @@ impl Default for StbptSettings {
         StbptSettings {
             bdpt: BdptSettings::default(),
             window: 4,
+            shutter: 0.0,
+            film_budget_mb: default_film_budget(),
         }
     }
 }
+
+/// Tiles of 16² pixels whose samples are made in one parallel batch before their
+/// contributions are merged into the films: bounds the memory of in-flight contributions
+/// (≈ 1024 tiles × 256 px × (2K + 1) frames × 3 films × 28 B ≈ 200 MB at K = 4) whatever
+/// the resolution.
+const TILES_PER_BATCH: usize = 1024;
 
 /// Salts separating a sample's light and connection streams from its camera stream.
 const LIGHT_STREAM: u64 = 0x9e37_79b9_7f4a_7c15;
@@ -194,6 +248,9 @@ pub struct Stbpt {
     /// Light-tracing splats (kept apart so the variance above is that of the landed
     /// samples).
     film_splat: Option<WindowFilm>,
+    /// Motion blur: per pixel, the mean offsets and values of the landed samples in the
+    /// neighbouring frames (empty without motion blur).
+    film_blur: Vec<WindowFilm>,
     /// Index in the render list of the next frame to generate.
     next: usize,
     pending: BTreeMap<u32, Pending>,
@@ -210,6 +267,7 @@ impl Stbpt {
             film: None,
             film_sq: None,
             film_splat: None,
+            film_blur: Vec::new(),
             next: 0,
             pending: BTreeMap::new(),
             served: BTreeMap::new(),
@@ -220,6 +278,43 @@ impl Stbpt {
 
     fn k(&self) -> u32 {
         self.settings.window.min((MAX_WINDOW_FRAMES as u32 - 1) / 2)
+    }
+
+    /// Creates the films on first use: the memory budget is shared by the four films in
+    /// proportion to what a pixel costs in each (the blur film only holds tiles when
+    /// motion blur is on).
+    fn open_films(&mut self, w: u32, h: u32) {
+        if self.film.is_some() {
+            return;
+        }
+        let budget = self.settings.film_budget_mb.max(1) << 20;
+        let blur = if self.settings.shutter > 0.0 { 4 } else { 0 };
+        let each = budget / (3 + blur);
+        self.film = Some(WindowFilm::with_budget(w, h, each, None));
+        self.film_sq = Some(WindowFilm::with_budget(w, h, each, None));
+        self.film_splat = Some(WindowFilm::with_budget(w, h, each, None));
+        self.film_blur = (0..blur)
+            .map(|_| WindowFilm::with_budget(w, h, each, None))
+            .collect();
+    }
+
+    /// Peak bytes held in memory by the films and their cache traffic (summed over the
+    /// films; the peaks of different films may not coincide, so this is an upper bound).
+    pub fn film_stats(&self) -> FilmStats {
+        let mut t = FilmStats::default();
+        let films = [&self.film, &self.film_sq, &self.film_splat];
+        for f in films.into_iter().flatten().chain(&self.film_blur) {
+            let s = f.stats();
+            t.peak_bytes += s.peak_bytes;
+            t.tile_hits += s.tile_hits;
+            t.tile_misses += s.tile_misses;
+            t.bytes_written += s.bytes_written;
+            t.bytes_read += s.bytes_read;
+            t.io_seconds += s.io_seconds;
+            t.tiles_written += s.tiles_written;
+            t.budget_bytes = t.budget_bytes.saturating_add(s.budget_bytes);
+        }
+        t
     }
 }
 
@@ -336,6 +431,56 @@ fn light_key(scene: &FrameScene) -> String {
     )
 }
 
+/// Motion blur of a reconstructed frame: every pixel's value (the mean of its landed
+/// samples) is spread over the pixels its trajectory crosses during the shutter
+/// ([`splat_trajectory`]), the trajectory being the mean over its landed samples of where
+/// their points are seen one frame before and after (`blur[0]`, `blur[1]`: raster offsets),
+/// positions and radiance (`blur[2]`, `blur[3]`: values there) linear in time between
+/// frames. Pixels no sample landed in contribute nothing.
+fn splat_pixel_trajectories(
+    means: &[Rgb],
+    weights: &[f32],
+    blur: &[Vec<Rgb>],
+    w: u32,
+    h: u32,
+    shutter: f32,
+) -> Vec<Rgb> {
+    let half = 0.5 * shutter;
+    let mut out = vec![Rgb::ZERO; means.len()];
+    let mut shares = Vec::new();
+    for (i, (&l, &n)) in means.iter().zip(weights).enumerate() {
+        if n <= 0.0 {
+            continue;
+        }
+        let c = Vec2::new((i as u32 % w) as f32 + 0.5, (i as u32 / w) as f32 + 0.5);
+        let (db, da) = (blur[0][i], blur[1][i]);
+        let (lb, la) = (blur[2][i], blur[3][i]);
+        let traj = [
+            TrajectoryVertex {
+                raster: c + Vec2::new(db.x, db.y) * half,
+                time: -half,
+                radiance: l + (lb - l) * half,
+            },
+            TrajectoryVertex {
+                raster: c,
+                time: 0.0,
+                radiance: l,
+            },
+            TrajectoryVertex {
+                raster: c + Vec2::new(da.x, da.y) * half,
+                time: half,
+                radiance: l + (la - l) * half,
+            },
+        ];
+        shares.clear();
+        splat_trajectory(&traj, w, h, &mut shares);
+        for sh in &shares {
+            out[sh.pixel as usize] += sh.value;
+        }
+    }
+    out
+}
+
 /// One view-independent entry at x1.
 struct Entry {
     wi: Vec3,
@@ -373,6 +518,24 @@ struct Generation<'a> {
     materials_same: FrameMask,
     /// Frames whose camera is f's (same placement, projection and image size).
     same_camera: FrameMask,
+    /// Shutter as a fraction of the frame interval (0: no motion blur).
+    shutter: f32,
+}
+
+/// A sample landed in window frame `j` at `raster` with `value` (buffered until the
+/// sample is complete, so a motion-blurred landing can use the sample's values in the
+/// neighbouring frames).
+#[derive(Clone, Copy)]
+struct Landing {
+    j: usize,
+    raster: Vec2,
+    value: Rgb,
+    /// Motion blur: raster positions of the sample's point one frame before / after.
+    around: [Option<Vec2>; 2],
+    /// The landing shows the point the sample found in its own frame (own frame or
+    /// reuse), so its values in two frames are the radiance of one point at two times;
+    /// a re-traced landing may show another point.
+    same_point: bool,
 }
 
 /// Output of one tile of one pass.
@@ -380,6 +543,10 @@ struct TileOut {
     batch: Vec<Contribution>,
     squares: Vec<Contribution>,
     splats: Vec<Contribution>,
+    /// Motion blur: per landed sample, its raster offsets to where its point is seen one
+    /// frame before / after, and its values there (films `film_blur[0..4]`).
+    blur: [Vec<Contribution>; 4],
+    landings: Vec<Landing>,
     stats: Vec<Stats>,
     counts: Counts,
 }
@@ -491,21 +658,140 @@ impl Generation<'_> {
         l
     }
 
-    fn land(out: &mut TileOut, frame: u32, pixel: u32, value: Rgb) {
-        out.batch.push(Contribution {
-            frame,
-            pixel,
+    fn land(
+        out: &mut TileOut,
+        j: usize,
+        raster: Vec2,
+        value: Rgb,
+        around: [Option<Vec2>; 2],
+        same_point: bool,
+    ) {
+        out.landings.push(Landing {
+            j,
+            raster,
             value,
-            weight: 1.0,
-            splat: false,
+            around,
+            same_point,
         });
-        out.squares.push(Contribution {
-            frame,
-            pixel,
-            value: value * value,
-            weight: 1.0,
-            splat: false,
-        });
+    }
+
+    /// Motion blur: where the point a sample shows in window frame `j` is seen one frame
+    /// before and after `j` (raster positions in those frames, visible or not). The point
+    /// is `v` on a surface of frame `src`'s scene (moved with its object), or, for an
+    /// escaped camera ray, the direction `dir` (at infinity).
+    fn trajectory(
+        &self,
+        j: usize,
+        src: usize,
+        v: Option<&Vertex>,
+        dir: Option<Vec3>,
+    ) -> [Option<Vec2>; 2] {
+        if self.shutter <= 0.0 {
+            return [None, None];
+        }
+        let v = v.filter(|v| v.kind == VertexKind::Surface);
+        let bary = v.and_then(|v| barycentrics(&self.scenes[src], v));
+        let at = |dj: isize| -> Option<Vec2> {
+            let jn = j
+                .checked_add_signed(dj)
+                .filter(|&jn| jn < self.frames.len())?;
+            if self.frames[jn].abs_diff(self.frames[j]) != 1 {
+                return None;
+            }
+            let scene_n = &self.scenes[jn];
+            let cam_n = &scene_n.camera;
+            match v {
+                None => dir.and_then(|d| cam_n.project(cam_n.position() + d.normalize())),
+                Some(v) => {
+                    let sv = v.surface.as_ref()?;
+                    let geom = sv.si.tri.geometry;
+                    let p = if same_placement(&self.scenes[src], scene_n, geom) {
+                        v.p
+                    } else {
+                        let (b1, b2) = bary?;
+                        let inst = scene_n.geometry_instance[geom as usize];
+                        scene_n.surface_at(sv.si.tri, inst, b1, b2, None).p
+                    };
+                    cam_n.project(p)
+                }
+            }
+        };
+        [at(-1), at(1)]
+    }
+
+    /// Turns the sample's buffered landings into film contributions: one landed sample at
+    /// its pixel, or (motion blur) a landed count at its pixel and its trajectory over the
+    /// shutter as splats.
+    fn flush(&self, out: &mut TileOut) {
+        let shutter = self.shutter;
+        let landings = std::mem::take(&mut out.landings);
+        for l in &landings {
+            let cam = &self.scenes[l.j].camera;
+            let (w, h) = (cam.width, cam.height);
+            let pixel = (l.raster.y as u32).min(h - 1) * w + (l.raster.x as u32).min(w - 1);
+            let frame = self.frames[l.j];
+            out.squares.push(Contribution {
+                frame,
+                pixel,
+                value: l.value * l.value,
+                weight: 1.0,
+                splat: false,
+            });
+            out.batch.push(Contribution {
+                frame,
+                pixel,
+                value: l.value,
+                weight: 1.0,
+                splat: false,
+            });
+            if shutter <= 0.0 {
+                continue;
+            }
+            // Neighbouring frames of the window one frame interval away: where the
+            // sample's point is seen there, and its value there if it landed.
+            let neighbour = |dj: isize| -> Option<(Vec2, Rgb)> {
+                let jn =
+                    l.j.checked_add_signed(dj)
+                        .filter(|&jn| jn < self.frames.len())?;
+                if self.frames[jn].abs_diff(frame) != 1 {
+                    return None;
+                }
+                let r = l.around[if dj < 0 { 0 } else { 1 }]?;
+                // Radiance interpolated between frames only between values of one point.
+                let v = landings
+                    .iter()
+                    .find(|o| o.j == jn && o.same_point && l.same_point)
+                    .map_or(l.value, |o| o.value);
+                Some((r, v))
+            };
+            let (before, after) = match (neighbour(-1), neighbour(1)) {
+                (Some(b), Some(a)) => (b, a),
+                (Some(b), None) => (b, (2.0 * l.raster - b.0, l.value)),
+                (None, Some(a)) => ((2.0 * l.raster - a.0, l.value), a),
+                (None, None) => ((l.raster, l.value), (l.raster, l.value)),
+            };
+            let d_before = before.0 - l.raster;
+            let d_after = after.0 - l.raster;
+            for (k, value) in [
+                Rgb::new(d_before.x, d_before.y, 0.0),
+                Rgb::new(d_after.x, d_after.y, 0.0),
+                before.1,
+                after.1,
+            ]
+            .into_iter()
+            .enumerate()
+            {
+                out.blur[k].push(Contribution {
+                    frame,
+                    pixel,
+                    value,
+                    weight: 1.0,
+                    splat: false,
+                });
+            }
+        }
+        out.landings = landings;
+        out.landings.clear();
     }
 
     /// One sample: generated in f, landed/reused/re-traced in every window frame.
@@ -621,20 +907,19 @@ impl Generation<'_> {
         }
 
         // Own frame: the ordinary BDPT sample.
-        let w = scene_f.camera.width;
         let mut own = emission.map_or(Rgb::ZERO, |(l, _)| l);
         for e in &sc.entries {
             if e.vis >> jf & 1 == 1 {
                 own += e.c;
             }
         }
-        let pixel = py * w + px;
         let mut inv = 0u64;
+        let around_f = self.trajectory(jf, jf, cam.get(1), sc.cam_rays.first().map(|r| r.d));
         if own.is_finite() {
-            Self::land(out, f, pixel, own);
+            Self::land(out, jf, raster, own, around_f, true);
         } else {
             inv += 1;
-            Self::land(out, f, pixel, Rgb::ZERO);
+            Self::land(out, jf, raster, Rgb::ZERO, around_f, true);
         }
         out.counts.landed[jf] += 1;
         sc.splats.clear();
@@ -747,13 +1032,14 @@ impl Generation<'_> {
                 out.counts.invalid[j] += inv;
                 continue;
             };
-            let gw = cam_g.width;
-            let pixel_g =
-                (raster_g.y as u32).min(cam_g.height - 1) * gw + (raster_g.x as u32).min(gw - 1);
+            let esc_dir = sc.cam_rays.first().map(|r| r.d);
+            let mut around = [None, None];
             let value = if reuse && x1.is_none() {
                 out.counts.reused[j] += 1;
+                around = self.trajectory(j, jf, None, esc_dir);
                 own
             } else if reuse {
+                around = self.trajectory(j, jf, x1, esc_dir);
                 let v = x1.unwrap();
                 let sv = v.surface.as_ref().unwrap();
                 let wo_g = (eye - v.p).normalize_or_zero();
@@ -778,17 +1064,22 @@ impl Generation<'_> {
                 );
                 let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
                 out.counts.retraced[j] += 1;
+                if self.shutter > 0.0 {
+                    let d = scene_g.camera.generate_ray(raster_g).d;
+                    around = self.trajectory(j, j, sc.cam_g.get(1), Some(d));
+                }
                 self.camera_strategies(j, light_g, &sc.cam_g, &ns, &mut out.stats[j])
             };
             out.counts.landed[j] += 1;
             if value.is_finite() {
-                Self::land(out, frame_g, pixel_g, value);
+                Self::land(out, j, raster_g, value, around, reuse);
             } else {
                 inv += 1;
-                Self::land(out, frame_g, pixel_g, Rgb::ZERO);
+                Self::land(out, j, raster_g, Rgb::ZERO, around, reuse);
             }
             out.counts.invalid[j] += inv;
         }
+        self.flush(out);
     }
 }
 
@@ -823,6 +1114,7 @@ impl Stbpt {
             .enumerate()
             .filter(|(_, s)| cam_key(s) == cam_key(&scenes[jf]))
             .fold(0, |m, (j, _)| m | 1 << j);
+        self.open_films(scenes[jf].camera.width, scenes[jf].camera.height);
         let gen_ = Generation {
             same_camera,
             bdpt: &self.settings.bdpt,
@@ -833,27 +1125,34 @@ impl Stbpt {
             mfa: &mfa,
             lights_same,
             materials_same,
+            shutter: self.settings.shutter,
         };
         let cam = &scenes[jf].camera;
         let (w, h) = (cam.width, cam.height);
-        let film = self.film.get_or_insert_with(|| WindowFilm::new(w, h));
-        let film_sq = self.film_sq.get_or_insert_with(|| WindowFilm::new(w, h));
-        let film_splat = self.film_splat.get_or_insert_with(|| WindowFilm::new(w, h));
+        let film = self.film.as_mut().expect("opened");
+        let film_sq = self.film_sq.as_mut().expect("opened");
+        let film_splat = self.film_splat.as_mut().expect("opened");
+        let film_blur = &mut self.film_blur;
         let tiles_x = w.div_ceil(TILE);
         let n_tiles = (tiles_x * h.div_ceil(TILE)) as usize;
         let n = frames.len();
         let spp = self.settings.bdpt.spp;
         let mut counts = Counts::new(n);
         let mut stats = vec![Stats::default(); n];
-        for s in 0..spp {
-            let results = parallel::map_chunks(n_tiles, 1, |range| {
-                let t = range.start as u32;
+        for (s, first) in
+            (0..spp).flat_map(|s| (0..n_tiles).step_by(TILES_PER_BATCH).map(move |t| (s, t)))
+        {
+            let batch_tiles = TILES_PER_BATCH.min(n_tiles - first);
+            let results = parallel::map_chunks(batch_tiles, 1, |range| {
+                let t = (first + range.start) as u32;
                 let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
                 let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
                 let mut out = TileOut {
                     batch: Vec::new(),
                     squares: Vec::new(),
                     splats: Vec::new(),
+                    blur: Default::default(),
+                    landings: Vec::new(),
                     stats: vec![Stats::default(); n],
                     counts: Counts::new(n),
                 };
@@ -871,6 +1170,9 @@ impl Stbpt {
                 film.add_batch(&r.batch);
                 film_sq.add_batch(&r.squares);
                 film_splat.add_batch(&r.splats);
+                for (film, batch) in film_blur.iter_mut().zip(&r.blur) {
+                    film.add_batch(batch);
+                }
                 counts.add(&r.counts);
                 for (a, b) in stats.iter_mut().zip(&r.stats) {
                     *a += *b;
@@ -924,12 +1226,22 @@ impl SequenceRenderer for Stbpt {
         let scene = source.frame(frame);
         let (w, h) = (scene.camera.width, scene.camera.height);
         let splat_scale = 1.0 / (spp as f32 * window as f32);
-        let film = self.film.get_or_insert_with(|| WindowFilm::new(w, h));
-        let (means, weights) = film.finish(frame, 0.0);
-        let film_sq = self.film_sq.get_or_insert_with(|| WindowFilm::new(w, h));
-        let (squares, _) = film_sq.finish(frame, 0.0);
-        let film_splat = self.film_splat.get_or_insert_with(|| WindowFilm::new(w, h));
-        let (splats, _) = film_splat.finish(frame, splat_scale);
+        self.open_films(w, h);
+        let (mut means, weights) = self.film.as_mut().expect("opened").finish(frame, 0.0);
+        let (squares, _) = self.film_sq.as_mut().expect("opened").finish(frame, 0.0);
+        let (splats, _) = self
+            .film_splat
+            .as_mut()
+            .expect("opened")
+            .finish(frame, splat_scale);
+        if self.settings.shutter > 0.0 {
+            let blur: Vec<Vec<Rgb>> = self
+                .film_blur
+                .iter_mut()
+                .map(|f| f.finish(frame, 0.0).0)
+                .collect();
+            means = splat_pixel_trajectories(&means, &weights, &blur, w, h, self.settings.shutter);
+        }
         // Variance of the mean of the landed samples, (E[v²] − E[v]²)/(n − 1); the splats'
         // share is not included (they are summed over many light subpaths).
         let variance = means
@@ -954,6 +1266,7 @@ impl SequenceRenderer for Stbpt {
             retraced: p.retraced,
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
             light_subpaths_per_pixel: spp as f64 * window as f64,
+            film: self.film_stats(),
         });
         self.served.retain(|&f, _| f + k >= frame);
         RenderedFrame {

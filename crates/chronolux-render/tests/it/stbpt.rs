@@ -42,6 +42,7 @@ fn stbpt_frame(
             ..Default::default()
         },
         window: k,
+        ..Default::default()
     });
     for f in 0..=out {
         let img = r.render_frame(&mut src, f, &|_| {});

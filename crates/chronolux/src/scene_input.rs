@@ -22,7 +22,9 @@ pub fn load(args: &SceneArgs) -> Result<SceneInput> {
                 stage::builtin(name).with_context(|| {
                     format!(
                         "no built-in scene '{name}' (available: {})",
-                        stage::BUILTIN_SCENES.map(|n| format!("builtin:{n}")).join(", ")
+                        stage::BUILTIN_SCENES
+                            .map(|n| format!("builtin:{n}"))
+                            .join(", ")
                     )
                 })?,
                 format!("built-in {name}"),

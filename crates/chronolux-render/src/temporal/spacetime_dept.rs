@@ -81,10 +81,11 @@ pub struct SpacetimeSettings {
     /// Longest specular chain of eye rays. Default 8.
     pub max_specular_depth: u32,
     /// Frames on each side of the output frame (K: the window has at most 2K + 1
-    /// frames; frame f is output once frame f + K is traced). Default 4.
+    /// frames; frame f is output once frame f + K is traced). Default 8.
+    /// (`RUST_LOG=chronolux_render=debug` prints the windows' power-weighted mean length.)
     pub window: u32,
-    /// Temporal Gaussian σ in frames. Default 8 (near-uniform weights over ±4 frames:
-    /// the change test, not the weights, limits the temporal blur).
+    /// Temporal Gaussian σ in frames. Default 8 (weights ≥ 0.6 over ±8 frames: the change
+    /// test, not the weights, limits the temporal blur).
     pub temporal_sigma: f32,
     /// Energy test: standard deviations of the difference that make a change
     /// significant. Default 3.
@@ -114,7 +115,7 @@ impl Default for SpacetimeSettings {
             spp: 16,
             elements: 100.0,
             max_specular_depth: 8,
-            window: 4,
+            window: 8,
             temporal_sigma: 8.0,
             change_threshold: 3.0,
             change_weber: 0.02,
@@ -578,6 +579,27 @@ impl SequenceRenderer for SpacetimeDept {
                 None => break (ind, cau, window),
             }
         };
+        if log::log_enabled!(log::Level::Debug) {
+            // Power-weighted mean window length and fraction of whole windows.
+            let whole = source.window(frame, s.window, s.window);
+            let whole = (whole[0], *whole.last().expect("frame in its window"));
+            let (mut w, mut len, mut full) = (0.0f64, 0.0f64, 0.0f64);
+            for (slot, win) in window.iter().enumerate() {
+                let p = (fe.area[slot / 2] * luminance(ind[slot] + cau[slot])) as f64;
+                if p > 0.0 {
+                    w += p;
+                    len += p * (win.1 - win.0 + 1) as f64;
+                    full += p * (*win == whole) as u8 as f64;
+                }
+            }
+            log::debug!(
+                "spacetime-dept frame {frame}: power-weighted mean window {:.2} frames, {:.1} % of the power with the whole window {}..={}",
+                len / w.max(1e-30),
+                100.0 * full / w.max(1e-30),
+                whole.0,
+                whole.1
+            );
+        }
         let cur = &self.frames[c];
         self.last_photons = Some(cur.photons.photons());
         let photon_rays = cur.photons.stats.rays;

@@ -497,7 +497,7 @@ fn weighted_fraction(sides: &[(usize, f32)], bad: impl Fn(usize) -> bool) -> f32
 /// The centred window on an abrupt change: in the built-in caustic scene an occluder
 /// enters between frames 3 and 4 (a STEP key), shadowing the glass sphere (its caustic
 /// vanishes) and the middle of the room. Element sides whose indirect + caustic light
-/// changes visibly at the step (by more than 30 % between frames 3 and 4, in a 400k-photon
+/// changes visibly at the step (by more than 30 % between frames 3 and 4, in a 200k-photon
 /// frame-by-frame solution) must not pool frames across it: at most 10 % of their power
 /// may have frame 3's window reach frame 4 or frame 4's reach frame 3 (the bound leaves
 /// room for the 3σ test's misses on sides with few photons: with 40k photons a side of
@@ -529,8 +529,8 @@ fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
     }
     let mesh = ElementMesh::build(&src.frame(0), elements);
     let (e3, e4) = (
-        fine_irradiance(&mut src, &mesh, 3, 400_000),
-        fine_irradiance(&mut src, &mesh, 4, 400_000),
+        fine_irradiance(&mut src, &mesh, 3, 200_000),
+        fine_irradiance(&mut src, &mesh, 4, 200_000),
     );
     let area = &info[3].area;
     let (mut changed, mut steady) = (Vec::new(), Vec::new());

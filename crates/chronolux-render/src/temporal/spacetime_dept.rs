@@ -55,7 +55,8 @@ use crate::dept::element_map::{
     ElementAccumulators, ElementMesh, FrameElements, FramePhotons, deposit_more_photons,
 };
 use crate::dept::reconstruct::{
-    ElementSolution, Filter, Neighbours, filtered_irradiance_sigma, prior_sq, range_weight,
+    ElementSolution, Filter, Neighbours, filter_with_sigma, filtered_irradiance_sigma, prior_sq,
+    range_weight,
 };
 use crate::dept::{DeptSettings, assess_frame, render_view};
 use crate::integrator::RenderedFrame;
@@ -268,14 +269,14 @@ impl Traced {
             both.count[s] += c.count[s];
             both.flux_sq[s] += c.flux_sq[s];
         }
-        let (e, sig) = filtered_irradiance_sigma(
-            mesh,
-            &both,
-            fe,
-            Filter::Gaussian {
-                radius: change_radius,
-            },
-        );
+        // Without the stopping rule's phantom-photon prior (`filter_with_sigma`'s
+        // `prior`): it adds one mean photon per neighbour, which where photons are sparse
+        // (≪ 1 per element and frame) inflates σ several times and hides real changes.
+        // Sides with no photons in either frame have Δ = 0 and never cut.
+        let r = change_radius * mesh.element_size;
+        let nb = Neighbours::new(fe, r);
+        let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r)).max(1e-30);
+        let (e, sig) = filter_with_sigma(&both, fe, &nb, 0.0, |_, _, d2| (-d2 * inv2s2).exp());
         self.stat = luminances(&e);
         self.stat_var = sig.iter().map(|s| s * s).collect();
         let (d, _) = filtered_irradiance_sigma(

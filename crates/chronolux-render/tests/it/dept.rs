@@ -498,14 +498,13 @@ fn weighted_fraction(sides: &[(usize, f32)], bad: impl Fn(usize) -> bool) -> f32
 /// enters between frames 3 and 4 (a STEP key), shadowing the glass sphere (its caustic
 /// vanishes) and the middle of the room. Element sides whose indirect + caustic light
 /// changes visibly at the step (by more than 30 % between frames 3 and 4, in a 200k-photon
-/// frame-by-frame solution) must not pool frames across it: at most 10 % of their power
-/// may have frame 3's window reach frame 4 or frame 4's reach frame 3 (the bound leaves
-/// room for the 3σ test's misses on sides with few photons: with 40k photons a side of
-/// the change statistic has a ~10 % error, so a 30 % change is tested at ~2–4σ of a
-/// single frame and ≥ 3.5σ once both sides of the step are pooled). And on either side of
-/// the step, where nothing visible changes, most of the power (≥ 80 %) keeps the whole
-/// window of its side (frames 0–3 for frame 3 is all the clip has before the step; the
-/// 20 % allows false cuts near the moving sphere and noise cuts at 3σ on ~10 tests).
+/// frame-by-frame solution) must not pool frames across it: at most 5 % of their power
+/// may have frame 3's window reach frame 4 or frame 4's reach frame 3 (measured 0.0 % and
+/// 0.1 % with these settings; the margin is for the 3σ test's misses, which grow as
+/// photons per side fall). On the far side of the step, where nothing visible changes,
+/// frame 3 keeps frames 0–2 for ≥ 80 % of the power of the sides whose light changes by
+/// < 5 % (measured 88 %: the spatially pooled statistic also cuts sides within 5 elements
+/// of a change, and the sphere moves).
 #[test]
 fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
     use chronolux_core::scene::stage::{CAUSTIC_OCCLUDER_TIME, caustic};
@@ -552,8 +551,13 @@ fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
     );
     let smear_into_before = weighted_fraction(&changed, |s| info[3].window[s].1 >= 4);
     let smear_into_after = weighted_fraction(&changed, |s| info[4].window[s].0 <= 3);
+    eprintln!(
+        "changed sides pooled across the step: {:.1} % (frame 3), {:.1} % (frame 4)",
+        100.0 * smear_into_before,
+        100.0 * smear_into_after
+    );
     assert!(
-        smear_into_before <= 0.1 && smear_into_after <= 0.1,
+        smear_into_before <= 0.05 && smear_into_after <= 0.05,
         "changed light pooled across the step: {:.1} % of frame 3's power, {:.1} % of frame 4's",
         100.0 * smear_into_before,
         100.0 * smear_into_after
@@ -563,6 +567,10 @@ fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
     // `change_radius` of a change, and the sphere moves, so not all of them) mostly pool
     // frames 0–3.
     let short3 = weighted_fraction(&steady, |s| info[3].window[s].0 != 0);
+    eprintln!(
+        "steady sides of frame 3 without frames 0–2: {:.1} %",
+        100.0 * short3
+    );
     assert!(
         short3 <= 0.2,
         "steady sides lost frames before the step: {:.1} %",
@@ -573,7 +581,7 @@ fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
 /// On a static scene the centred window is whole: 2K + 1 frames around a middle frame,
 /// cut short only by the ends of the render list, for at least 95 % of the power (the
 /// change test runs ~10 tests per side at 3σ and a 2 % visibility threshold, so a few
-/// sides cut by noise are expected; 95 % is that margin).
+/// sides cut by noise are expected: measured ≤ 0.5 % per frame; 5 % is the margin).
 #[test]
 fn spacetime_window_is_whole_on_a_static_scene() {
     use chronolux_render::sequence::SequenceRenderer;
@@ -601,6 +609,10 @@ fn spacetime_window_is_whole_on_a_static_scene() {
             .filter(|s| s.1 > 0.0)
             .collect();
         let cut = weighted_fraction(&sides, |s| info.window[s] != whole);
+        eprintln!(
+            "frame {f}: {:.2} % of the power with a cut window",
+            100.0 * cut
+        );
         assert!(
             cut <= 0.05,
             "frame {f}: {:.1} % of the power with a cut window",

@@ -724,6 +724,35 @@ mod tests {
     }
 
     #[test]
+    fn caustic_occluder_enters_between_frames_3_and_4() {
+        let d = builtin("caustic").unwrap();
+        assert_eq!(d.animations[0].duration(), CAUSTIC_DURATION);
+        let node = |name: &str| d.nodes.iter().position(|n| n.name == name).unwrap();
+        let (occ, sphere) = (node("occluder"), node("glass_sphere"));
+        // (lowest, highest) world y of node n's vertices at time t.
+        let span_y = |n: usize, t: f32| {
+            let pose = pose_at(&d, Some(AnimationId(0)), t);
+            d.meshes[d.nodes[n].mesh.unwrap().index()].primitives[0]
+                .positions
+                .iter()
+                .map(|&p| pose.world[n].transform_point3(p).y)
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), y| {
+                    (lo.min(y), hi.max(y))
+                })
+        };
+        // Frames 0–3 (24 fps): entirely under the floor; frames 4+: between the sphere's
+        // top and the lamp (y = 1.98).
+        for f in 0..4 {
+            assert!(span_y(occ, f as f32 / 24.0).1 < 0.0, "frame {f}");
+        }
+        for f in 4..48 {
+            let t = f as f32 / 24.0;
+            let (lo, hi) = span_y(occ, t);
+            assert!(lo > span_y(sphere, t).1 && hi < 1.98, "frame {f}");
+        }
+    }
+
+    #[test]
     fn demo_is_two_seconds_and_well_formed() {
         let d = demo();
         assert_eq!(d.animations.len(), 1);

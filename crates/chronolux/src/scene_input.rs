@@ -17,7 +17,20 @@ pub struct SceneInput {
 
 pub fn load(args: &SceneArgs) -> Result<SceneInput> {
     let (mut desc, source) = match &args.scene {
-        Some(path) => (chronolux_io::gltf::load(path)?, path.display().to_string()),
+        Some(path) => match builtin_name(path) {
+            Some(name) => (
+                stage::builtin(name).with_context(|| {
+                    format!(
+                        "no built-in scene '{name}' (available: {})",
+                        stage::BUILTIN_SCENES
+                            .map(|n| format!("builtin:{n}"))
+                            .join(", ")
+                    )
+                })?,
+                format!("built-in {name}"),
+            ),
+            None => (chronolux_io::gltf::load(path)?, path.display().to_string()),
+        },
         None => (stage::demo(), "built-in demo".to_string()),
     };
     if let Some(s) = &args.stage {
@@ -65,6 +78,11 @@ pub fn load(args: &SceneArgs) -> Result<SceneInput> {
         camera,
         source,
     })
+}
+
+/// `builtin:NAME` names a built-in scene ([`stage::builtin`]) instead of a file.
+fn builtin_name(path: &std::path::Path) -> Option<&str> {
+    path.to_str()?.strip_prefix("builtin:")
 }
 
 /// Cameras placed in the scene by a node, as (camera index, node name), in glTF order.

@@ -1,5 +1,6 @@
 //! Scenes built in code: a Cornell room ([`cornell_box`]), a way to place any scene inside
-//! it ([`cornell_stage`]) and the built-in demo animation ([`demo`]).
+//! it ([`cornell_stage`]), the built-in demo animation ([`demo`]) and a caustic scene with
+//! an abrupt change ([`caustic`]).
 //!
 //! The room spans x, z ∈ [-1, 1], y ∈ [0, 2] (y up); the front (z = +1) is open and the
 //! camera looks down −Z into it from z ≈ 3.9. It is lit only by an emissive quad just below
@@ -487,6 +488,98 @@ pub fn demo() -> SceneDesc {
     d
 }
 
+/// Duration of the caustic clip in seconds (48 frames at 24 fps).
+pub const CAUSTIC_DURATION: f32 = 2.0;
+/// Time (s) at which the caustic scene's occluder enters (between frames 3 and 4 at
+/// 24 fps): a STEP key, so the lighting changes abruptly from one frame to the next.
+pub const CAUSTIC_OCCLUDER_TIME: f32 = 0.15;
+
+/// A caustic scene with an abrupt change: the Cornell room with a glass sphere (IOR 1.5,
+/// radius 0.3) that rolls slowly across the floor under the lamp, focusing a caustic on
+/// the floor, and a white diffuse block (0.5 × 0.1 × 0.5) that *enters* at
+/// [`CAUSTIC_OCCLUDER_TIME`] (STEP keys: hidden under the floor before, hanging 0.45 below
+/// the lamp after), shadowing the sphere and the middle of the floor from one frame to the
+/// next. One clip named `"caustic"` lasting [`CAUSTIC_DURATION`]; static camera.
+pub fn caustic() -> SceneDesc {
+    let mut d = cornell_box();
+    d.name = "caustic".into();
+    let glass = push_material(
+        &mut d,
+        Material {
+            name: "glass".into(),
+            base_color: Rgb::ONE,
+            metallic: 0.0,
+            roughness: 0.0,
+            transmission: 1.0,
+            ior: 1.5,
+            ..Default::default()
+        },
+    );
+    let white = push_material(&mut d, Material::diffuse("occluder", Rgb::splat(0.73)));
+    let r = 0.3 * ROOM_HALF;
+    let at = |p: Vec3| Trs {
+        translation: p,
+        ..Default::default()
+    };
+    let (x0, x1, z) = (-0.25 * ROOM_HALF, 0.25 * ROOM_HALF, 0.05 * ROOM_HALF);
+    let sphere = push_mesh(
+        &mut d,
+        "glass_sphere",
+        uv_sphere(r, 48, 32),
+        glass,
+        at(Vec3::new(x0, r, z)),
+    );
+    // The occluder: a flat block, hidden under the floor (fully below y = 0, where neither
+    // the lamp nor the camera sees it) until it enters.
+    let hidden = Vec3::new(0.0, -0.5 * ROOM_HALF, 0.0);
+    let shown = Vec3::new(0.0, 1.45 * ROOM_HALF, 0.0);
+    let occluder = push_mesh(
+        &mut d,
+        "occluder",
+        cube_primitive(0.25 * ROOM_HALF),
+        white,
+        Trs {
+            translation: hidden,
+            rotation: Quat::IDENTITY,
+            scale: Vec3::new(1.0, 0.2, 1.0),
+        },
+    );
+    d.animations.push(Animation {
+        name: "caustic".into(),
+        channels: vec![
+            Channel {
+                node: sphere,
+                target: ChannelTarget::Translation,
+                interpolation: Interpolation::Linear,
+                times: vec![0.0, CAUSTIC_DURATION],
+                values: vec![x0, r, z, x1, r, z],
+                components: 3,
+            },
+            Channel {
+                node: occluder,
+                target: ChannelTarget::Translation,
+                interpolation: Interpolation::Step,
+                times: vec![0.0, CAUSTIC_OCCLUDER_TIME],
+                values: vec![hidden.x, hidden.y, hidden.z, shown.x, shown.y, shown.z],
+                components: 3,
+            },
+        ],
+    });
+    d
+}
+
+/// Names of the built-in scenes ([`builtin`]).
+pub const BUILTIN_SCENES: [&str; 2] = ["demo", "caustic"];
+
+/// A built-in scene by name (`demo`, `caustic`).
+pub fn builtin(name: &str) -> Option<SceneDesc> {
+    match name {
+        "demo" => Some(demo()),
+        "caustic" => Some(caustic()),
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -628,6 +721,35 @@ mod tests {
         let a = pose_at(&staged, Some(AnimationId(0)), 0.0).world[child].w_axis;
         let b = pose_at(&staged, Some(AnimationId(0)), 1.0).world[child].w_axis;
         assert!((b - a).length() > 0.01);
+    }
+
+    #[test]
+    fn caustic_occluder_enters_between_frames_3_and_4() {
+        let d = builtin("caustic").unwrap();
+        assert_eq!(d.animations[0].duration(), CAUSTIC_DURATION);
+        let node = |name: &str| d.nodes.iter().position(|n| n.name == name).unwrap();
+        let (occ, sphere) = (node("occluder"), node("glass_sphere"));
+        // (lowest, highest) world y of node n's vertices at time t.
+        let span_y = |n: usize, t: f32| {
+            let pose = pose_at(&d, Some(AnimationId(0)), t);
+            d.meshes[d.nodes[n].mesh.unwrap().index()].primitives[0]
+                .positions
+                .iter()
+                .map(|&p| pose.world[n].transform_point3(p).y)
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), y| {
+                    (lo.min(y), hi.max(y))
+                })
+        };
+        // Frames 0–3 (24 fps): entirely under the floor; frames 4+: between the sphere's
+        // top and the lamp (y = 1.98).
+        for f in 0..4 {
+            assert!(span_y(occ, f as f32 / 24.0).1 < 0.0, "frame {f}");
+        }
+        for f in 4..48 {
+            let t = f as f32 / 24.0;
+            let (lo, hi) = span_y(occ, t);
+            assert!(lo > span_y(sphere, t).1 && hi < 1.98, "frame {f}");
+        }
     }
 
     #[test]

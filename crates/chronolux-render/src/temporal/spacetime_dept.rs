@@ -1,38 +1,53 @@
 //! Space-time photon density estimation (`spacetime-dept`): DEPT whose element estimates
-//! pool photons over a per-element temporal window and then over neighbouring elements,
-//! with a bilateral filter that keeps abrupt changes (Myszkowski et al. 2001; Weber et al.,
-//! "Spatio-temporal photon density estimation using bilateral filtering", CGI 2004).
+//! pool photons over a per-element temporal window **centred** on the output frame and
+//! then over neighbouring elements, with a bilateral filter that keeps abrupt changes
+//! (Myszkowski et al. 2001; Weber et al., "Spatio-temporal photon density estimation using
+//! bilateral filtering", CGI 2004).
 //!
-//! ## Per frame t
-//! 1. Photons `t·N .. (t+1)·N` are traced with the shared kernel and deposited on the
-//!    element mesh, which is built once from the first frame (stable element ids; rebuilt,
-//!    and the history dropped, only if the topology changes). The frame's per-element
-//!    sums (flux, count, Σφ²) and element areas go into a history of the last `window`
-//!    frames (memory: O(elements × window)).
-//! 2. **Temporal window, per element side**: starting from frame t, earlier frames
-//!    t−1, t−2, … are added (ratio estimator Σ w_k Φ_k / (N Σ w_k A_k), Gaussian weight
-//!    w_k in the frame distance, σ = `temporal_sigma`) until the element has enough
-//!    photons (at least `target_photons` and a standard error below `weber` (2 %) of its
-//!    total irradiance, direct included: the perceptual threshold of the stopping rule),
-//!    or until the **energy test** fails: frame k's irradiance differs from the
-//!    window's so far by more than `change_threshold` standard deviations of their
-//!    difference (σ from Σφ², see `dept::reconstruct`). So static lighting pools
-//!    up to `window` frames and a change (a light switching on, an object arriving) cuts
-//!    the window at the change — the temporal blur the method is meant to avoid.
-//! 3. **Spatial completion**: elements that still do not have enough photons are
-//!    filtered with the spatial bilateral filter over neighbours' temporal estimates
-//!    (range kernel from the estimates' noise, relaxed to a plain Gaussian below
-//!    `min_photons`); elements with enough photons keep their own estimate.
-//! 4. Vertex interpolation and the eye pass are those of `dept` (direct light per pixel).
+//! ## Look-ahead
+//! Frame f is output after the photons of frames f+1 … f+K (K = `window`) have been
+//! traced: each frame's photons are traced **once**, when the frame first enters a window
+//! (its scene comes from the [`FrameSource`], which keeps the K + 2 most recent scenes so
+//! the output frame's scene is not rebuilt), and its per-element sums stay in memory
+//! until the frame leaves the window (memory: O(elements × (2K + 1))). Frame g uses
+//! photons `g·N .. (g+1)·N` of the Halton stream (stopping rule: the first of
+//! `g·max_photons ..`), the same as the frame-by-frame baselines.
 //!
-//! ## Causal window (design choice)
-//! The `render` loop hands frames over in order; this renderer uses only the current and
-//! **past** frames, so it needs neither a lag nor its own `FrameBuilder`, and frame t's
-//! image never waits for frame t+1. The published method uses a window centred on t;
-//! a causal window has the same variance reduction for static lighting and lags by
-//! nothing at a change because the energy test cuts the window there, but after a change
-//! the first frames have only their own photons (plus spatial filtering) until the new
-//! lighting has accumulated.
+//! ## Per frame f
+//! 1. **Change statistic**, once per traced frame g: the indirect + caustic luminance
+//!    irradiance of every element side, *spatially pooled* with a Gaussian over
+//!    `change_radius` element sizes (ratio estimator, as `dept-spatial`), and its standard
+//!    error (from Σφ², see [`crate::dept::reconstruct`]). An element alone has a handful of
+//!    photons per frame, too few to tell a 30 % drop from noise (the first, per-element
+//!    test missed the box shutting off BoxAnimated's lamp); the pooled statistic has
+//!    ~(change_radius/2)²·π times the photons, so its σ is several times smaller.
+//! 2. **Temporal window, per element side**, grown one frame at a time on both sides of f
+//!    (frames of the render list within ±K). A candidate frame k is refused, and that side
+//!    closed, when it differs from the window so far by a **visible and significant**
+//!    amount: `|Δ| > change_threshold · σ_Δ` **and** `|Δ| > change_weber · E_f` (E_f: the
+//!    side's total irradiance in frame f, direct included, so sub-threshold drift is
+//!    pooled: Myszkowski's perception-based energy test), where Δ is tested twice — frame
+//!    k alone against the mean of the window, and the mean of *all* frames from k to the
+//!    end of that side against the window (a step change between k−1 and k shifts every
+//!    frame beyond it, so pooling them makes the test √(frames beyond) times more
+//!    sensitive, like a CUSUM test). Once grown, every split of the window is tested
+//!    the same way, the frames on one side of it against the other, and the window is cut
+//!    at the most significant split until none fires (binary segmentation), because a
+//!    window grown from the output frame alone has too little evidence against a step
+//!    right next to it.
+//! 3. **Temporal pooling** in the window: ratio estimator `Σ w_k Φ_k / Σ w_k N_k A_k`
+//!    (Φ: flux sum, N: photons emitted, A: element area in frame k), Gaussian weights in
+//!    the frame distance (σ = `temporal_sigma`), so frames with more photons count more.
+//! 4. **Spatial bilateral filtering** of the pooled sums over `radius` element sizes:
+//!    spatial Gaussian × range kernel of `kappa` standard deviations of the pooled
+//!    estimates' noise (a precise pooled estimate pools flat neighbourhoods and stops at
+//!    edges; below `min_photons` pooled photons the range kernel is dropped: the published
+//!    fix for noisy small elements).
+//! 5. Vertex interpolation and the eye pass are those of `dept` (direct light per pixel).
+//!
+//! A static scene keeps whole windows (2K + 1 frames, fewer at the ends of the render
+//! list); a change cuts the window of the elements it visibly changes at the change, on
+//! each side, so an abrupt change is not smeared into the frames before or after it.
 
 use crate::dept::budget::luminances;
 use crate::dept::budget::{AutoPhotons, PhotonCount, next_total};
@@ -40,14 +55,16 @@ use crate::dept::element_map::{
     ElementAccumulators, ElementMesh, FrameElements, FramePhotons, deposit_more_photons,
 };
 use crate::dept::reconstruct::{
-    ElementSolution, Filter, Neighbours, filtered_irradiance_sigma, prior_sq, range_weight,
+    ElementSolution, Filter, Neighbours, filter_with_sigma, filtered_irradiance_sigma, prior_sq,
+    range_weight,
 };
 use crate::dept::{DeptSettings, assess_frame, render_view};
 use crate::integrator::RenderedFrame;
 use crate::sequence::SequenceRenderer;
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::parallel;
-use std::collections::VecDeque;
+use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::scene::source::FrameSource;
 
 /// Settings of `spacetime-dept`.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -64,29 +81,28 @@ pub struct SpacetimeSettings {
     pub elements: f32,
     /// Longest specular chain of eye rays. Default 8.
     pub max_specular_depth: u32,
-    /// Past frames kept (longest temporal window = window + 1 frames). Default 8.
+    /// Frames on each side of the output frame (K: the window has at most 2K + 1
+    /// frames; frame f is output once frame f + K is traced). Default 8.
+    /// (`RUST_LOG=chronolux_render=debug` prints the windows' power-weighted mean length.)
     pub window: u32,
-    /// "Enough photons" for an element side, after which no further frames or neighbours
-    /// are pooled: at least this many photons **and** a standard error below `weber` times
-    /// the side's total irradiance (direct included, estimated from the frame's first-hit
-    /// photons as in [`crate::dept::budget`]). Default 64.
-    pub target_photons: u32,
-    /// Luminance contrast (Weber fraction) below which an element's own noise is
-    /// invisible, so pooling stops. Default 0.02 (the stopping rule's threshold). A pure
-    /// count (the first version: 64 photons) left 12.5 % noise on every element that
-    /// reached it, which with a few hundred thousand photons per frame was most of them,
-    /// unfiltered: noisier than the Gaussian baseline at equal photons.
-    pub weber: f32,
-    /// Energy test: standard deviations of difference that mean "the lighting changed".
-    /// Default 3.
-    pub change_threshold: f32,
-    /// Temporal Gaussian σ in frames. Default 4.
+    /// Temporal Gaussian σ in frames. Default 8 (weights ≥ 0.6 over ±8 frames: the change
+    /// test, not the weights, limits the temporal blur).
     pub temporal_sigma: f32,
-    /// Spatial filter radius in element sizes. Default 2.5.
+    /// Energy test: standard deviations of the difference that make a change
+    /// significant. Default 3.
+    pub change_threshold: f32,
+    /// Energy test: luminance contrast (Weber fraction of the side's total irradiance)
+    /// below which a change is invisible and frames are pooled across it. Default 0.02.
+    pub change_weber: f32,
+    /// Radius (element sizes) of the spatial Gaussian pooling of the change statistic.
+    /// Default 5.
+    pub change_radius: f32,
+    /// Spatial bilateral filter radius in element sizes. Default 2.5 (as `dept-spatial`).
     pub radius: f32,
     /// Range kernel width in noise standard deviations. Default 2.
     pub kappa: f32,
-    /// Below this many photons the range kernel is dropped (plain Gaussian). Default 8.
+    /// Below this many pooled photons the range kernel is dropped (plain Gaussian).
+    /// Default 8.
     pub min_photons: u32,
     /// Seed of the photon and camera streams. Default 0.
     pub seed: u64,
@@ -101,10 +117,10 @@ impl Default for SpacetimeSettings {
             elements: 100.0,
             max_specular_depth: 8,
             window: 8,
-            target_photons: 64,
-            weber: 0.02,
+            temporal_sigma: 8.0,
             change_threshold: 3.0,
-            temporal_sigma: 4.0,
+            change_weber: 0.02,
+            change_radius: 5.0,
             radius: 2.5,
             kappa: 2.0,
             min_photons: 8,
@@ -128,18 +144,201 @@ impl SpacetimeSettings {
     }
 }
 
-/// One past frame's sums.
-struct HistoryFrame {
+/// Chooses the temporal window of one element side. `series[k]` = (change statistic,
+/// its variance) of the k-th frame of the look-ahead (increasing frames), `centre` the
+/// output frame; returns the first and last index pooled. The window grows one frame at a
+/// time on each side (after, then before) until a candidate frame is refused: it, or the
+/// mean of all frames from it to the end of its side, differs from the mean of the window
+/// so far by more than `threshold` standard deviations of the difference **and** by more
+/// than `tolerance` (the visibility threshold). A second pass tests every split of the
+/// grown window, the frames on one side against the other, and cuts at the most
+/// significant one until none fires (binary segmentation). See the module documentation.
+pub fn choose_window(
+    series: &[(f32, f32)],
+    centre: usize,
+    threshold: f32,
+    tolerance: f32,
+) -> (usize, usize) {
+    let n = series.len();
+    debug_assert!(centre < n);
+    let (thr, tol) = (threshold as f64, tolerance.max(0.0) as f64);
+    let fires = |a: f64, va: f64, b: f64, vb: f64| {
+        let d = (a - b).abs();
+        d > thr * (va + vb).max(0.0).sqrt() && d > tol
+    };
+    let mean = |part: &[(f32, f32)]| {
+        let m = part.len() as f64;
+        let (s, v) = part.iter().fold((0.0f64, 0.0f64), |(s, v), x| {
+            (s + x.0 as f64, v + x.1 as f64)
+        });
+        (s / m, v / (m * m))
+    };
+    let (mut lo, mut hi) = (centre, centre);
+    let (mut sum, mut var, mut m) = (series[centre].0 as f64, series[centre].1 as f64, 1.0f64);
+    let (mut open_lo, mut open_hi) = (centre > 0, centre + 1 < n);
+    let refused = |k: usize, tail: &[(f32, f32)], sum: f64, var: f64, m: f64| {
+        let (mw, vw) = (sum / m, var / (m * m));
+        let (mt, vt) = mean(tail);
+        fires(series[k].0 as f64, series[k].1 as f64, mw, vw) || fires(mt, vt, mw, vw)
+    };
+    while open_lo || open_hi {
+        if open_hi {
+            let k = hi + 1;
+            if refused(k, &series[k..], sum, var, m) {
+                open_hi = false;
+            } else {
+                hi = k;
+                sum += series[k].0 as f64;
+                var += series[k].1 as f64;
+                m += 1.0;
+                open_hi = hi + 1 < n;
+            }
+        }
+        if open_lo {
+            let k = lo - 1;
+            if refused(k, &series[..=k], sum, var, m) {
+                open_lo = false;
+            } else {
+                lo = k;
+                sum += series[k].0 as f64;
+                var += series[k].1 as f64;
+                m += 1.0;
+                open_lo = lo > 0;
+            }
+        }
+    }
+    // Second pass, with the whole window known (binary segmentation): every split of
+    // the window is tested, the frames on one side of it against those on the other; the
+    // most significant split that fires cuts the window, keeping the part with the
+    // centre, and the rest is tested again. A window grown from the centre alone has too
+    // little evidence against a step right next to it; the two sides pooled have it.
+    loop {
+        let mut best: Option<(f64, usize)> = None;
+        for k in lo + 1..=hi {
+            let ((ma, va), (mb, vb)) = (mean(&series[lo..k]), mean(&series[k..=hi]));
+            if fires(ma, va, mb, vb) {
+                let z = (ma - mb).abs() / (va + vb).max(1e-30).sqrt();
+                if best.is_none_or(|(bz, _)| z > bz) {
+                    best = Some((z, k));
+                }
+            }
+        }
+        match best {
+            Some((_, k)) if k <= centre => lo = k,
+            Some((_, k)) => hi = k - 1,
+            None => break,
+        }
+    }
+    (lo, hi)
+}
+
+/// One traced frame: its photon sums and its change statistic.
+struct Traced {
     frame: u32,
     photons: FramePhotons,
     area: Vec<f32>,
+    /// Change statistic per element side: indirect + caustic luminance irradiance,
+    /// spatially pooled over `change_radius` elements.
+    stat: Vec<f32>,
+    /// Its variance.
+    stat_var: Vec<f32>,
+    /// Direct luminance irradiance of the photons' first hits (Gaussian over 2.5
+    /// elements): sets the visibility threshold of the change test and of the stopping
+    /// rule.
+    direct: Vec<f32>,
+}
+
+impl Traced {
+    fn new(frame: u32, mesh: &ElementMesh, fe: &FrameElements) -> Self {
+        Traced {
+            frame,
+            photons: FramePhotons::new(mesh.element_count()),
+            area: fe.area.clone(),
+            stat: Vec::new(),
+            stat_var: Vec::new(),
+            direct: Vec::new(),
+        }
+    }
+
+    /// (Re)computes the change statistic and the direct irradiance from the sums.
+    fn analyse(&mut self, mesh: &ElementMesh, fe: &FrameElements, change_radius: f32) {
+        let mut both: ElementAccumulators = self.photons.indirect.clone();
+        let c = &self.photons.caustic;
+        for s in 0..both.flux.len() {
+            both.flux[s] += c.flux[s];
+            both.count[s] += c.count[s];
+            both.flux_sq[s] += c.flux_sq[s];
+        }
+        // Without the stopping rule's phantom-photon prior (`filter_with_sigma`'s
+        // `prior`): it adds one mean photon per neighbour, which where photons are sparse
+        // (≪ 1 per element and frame) inflates σ several times and hides real changes.
+        // Sides with no photons in either frame have Δ = 0 and never cut.
+        let r = change_radius * mesh.element_size;
+        let nb = Neighbours::new(fe, r);
+        let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r)).max(1e-30);
+        let (e, sig) = filter_with_sigma(&both, fe, &nb, 0.0, |_, _, d2| (-d2 * inv2s2).exp());
+        self.stat = luminances(&e);
+        self.stat_var = sig.iter().map(|s| s * s).collect();
+        let (d, _) = filtered_irradiance_sigma(
+            mesh,
+            &self.photons.direct,
+            fe,
+            Filter::Gaussian { radius: 2.5 },
+        );
+        self.direct = luminances(&d);
+    }
+}
+
+/// Temporally pooled sums of one element side: `Σ w Φ`, `Σ w N A`, `Σ w² Σφ²`, photons.
+#[derive(Clone, Copy, Debug, Default)]
+struct Pooled {
+    flux: Rgb,
+    na: f32,
+    sq: f32,
+    count: u32,
+}
+
+impl Pooled {
+    #[inline]
+    fn lum(&self) -> f32 {
+        if self.na > 0.0 {
+            luminance(self.flux) / self.na
+        } else {
+            0.0
+        }
+    }
+    #[inline]
+    fn sigma(&self) -> f32 {
+        if self.na > 0.0 {
+            self.sq.sqrt() / self.na
+        } else {
+            0.0
+        }
+    }
+}
+
+/// What the last frame's reconstruction did, per element side (diagnostics and tests).
+#[derive(Clone, Debug, Default)]
+pub struct SpacetimeFrameInfo {
+    pub frame: u32,
+    /// First and last frame pooled by each element side.
+    pub window: Vec<(u32, u32)>,
+    /// Reconstructed indirect + caustic irradiance of each element side.
+    pub irradiance: Vec<Rgb>,
+    /// Element areas in this frame.
+    pub area: Vec<f32>,
 }
 
 /// The `spacetime-dept` sequence renderer.
 pub struct SpacetimeDept {
     pub settings: SpacetimeSettings,
     mesh: Option<ElementMesh>,
-    history: VecDeque<HistoryFrame>,
+    /// Traced frames of the current window, increasing.
+    frames: Vec<Traced>,
+    last_output: Option<u32>,
+    last_photons: Option<u64>,
+    /// The last frame's windows and solution.
+    pub info: Option<SpacetimeFrameInfo>,
 }
 
 impl SpacetimeDept {
@@ -147,7 +346,10 @@ impl SpacetimeDept {
         SpacetimeDept {
             settings,
             mesh: None,
-            history: VecDeque::new(),
+            frames: Vec::new(),
+            last_output: None,
+            last_photons: None,
+            info: None,
         }
     }
 
@@ -163,140 +365,110 @@ impl SpacetimeDept {
         }
     }
 
-    /// True when an element side with `count` photons, luminance irradiance `e`, standard
-    /// error `sigma` and direct irradiance `direct` needs no more photons.
-    #[inline]
-    fn enough(&self, count: u32, e: f32, sigma: f32, direct: f32) -> bool {
+    /// First photon index of frame `g` and the photons a frame gets when it is first
+    /// traced (stopping rule: the last output frame's count, a prediction the rule
+    /// corrects when the frame is output).
+    fn first_photons(&self, g: u32) -> (u64, u64) {
         let s = &self.settings;
-        count >= s.target_photons && sigma <= s.weber * (e + direct).max(0.0)
-    }
-
-    /// Temporal pooling of one field (indirect or caustic) over the history (newest
-    /// last): returns pooled sums as accumulators plus the pooled areas. Frames may have
-    /// different photon counts (stopping rule): each frame's sums are divided by its own
-    /// count, so the returned accumulators are per unit photon (`photons = 1`).
-    fn pool(
-        &self,
-        field: impl Fn(&FramePhotons) -> &ElementAccumulators + Sync,
-        direct: &[f32],
-    ) -> (ElementAccumulators, Vec<f32>) {
-        let s = &self.settings;
-        let cur = self.history.back().expect("current frame in history");
-        let acc = field(&cur.photons);
-        let n_slots = acc.flux.len();
-        let inv_n = 1.0 / acc.photons.max(1) as f32;
-        let inv2s2 = 1.0 / (2.0 * s.temporal_sigma.max(1e-3).powi(2));
-        let pool_slot = |slot: usize| {
-            let a0 = cur.area[slot / 2];
-            let (mut phi, mut a, mut cnt, mut sq) = (
-                acc.flux[slot] * inv_n,
-                a0,
-                acc.count[slot],
-                acc.flux_sq[slot] * inv_n * inv_n,
-            );
-            for past in self.history.iter().rev().skip(1) {
-                if a <= 0.0 || self.enough(cnt, luminance(phi) / a, sq.sqrt() / a, direct[slot]) {
-                    break;
-                }
-                let p = field(&past.photons);
-                let inv_k = 1.0 / p.photons.max(1) as f32;
-                let ak = past.area[slot / 2];
-                if ak <= 0.0 {
-                    break;
-                }
-                // Energy test against the window so far.
-                let e_win = luminance(phi) / a;
-                let e_k = luminance(p.flux[slot]) * inv_k / ak;
-                let var = sq / (a * a) + (p.flux_sq[slot] * inv_k * inv_k) / (ak * ak);
-                let diff = (e_k - e_win).abs();
-                if diff > s.change_threshold * var.sqrt() + 1e-6 * e_win.max(e_k) {
-                    break;
-                }
-                let dt = (cur.frame - past.frame) as f32;
-                let w = (-dt * dt * inv2s2).exp();
-                phi += p.flux[slot] * (w * inv_k);
-                a += ak * w;
-                cnt += p.count[slot];
-                sq += p.flux_sq[slot] * (w * inv_k) * (w * inv_k);
+        match s.auto {
+            None => (g as u64 * s.photons, s.photons),
+            Some(a) => {
+                let max = a.max_photons.max(1);
+                let n = self
+                    .last_photons
+                    .unwrap_or(a.batch)
+                    .clamp(a.batch.min(max), max);
+                (g as u64 * max, n)
             }
-            (phi, cnt, sq, a)
-        };
-        // Per-slot work is independent: parallel chunks, concatenated in order.
-        let rows = parallel::map_chunks(n_slots, 4096, |r| r.map(pool_slot).collect::<Vec<_>>());
-        let mut out = ElementAccumulators::new(n_slots / 2);
-        out.photons = 1;
-        let mut area = Vec::with_capacity(n_slots);
-        for (slot, (phi, cnt, sq, a)) in rows.into_iter().flatten().enumerate() {
-            out.flux[slot] = phi;
-            out.count[slot] = cnt;
-            out.flux_sq[slot] = sq;
-            area.push(a);
         }
-        (out, area)
     }
 
-    /// Spatial completion of pooled sums: bilateral over neighbours for elements short of
-    /// `target_photons`, their own estimate otherwise. Returns irradiance per slot.
-    /// Also returns the standard error of each luminance estimate, with `prior` (per unit
-    /// photon, see [`crate::dept::reconstruct::filter_with_sigma`]) added to every Σφ².
-    #[allow(clippy::too_many_arguments)]
-    fn complete(
-        &self,
-        pooled: &ElementAccumulators,
-        area: &[f32],
-        fe: &FrameElements,
-        nb: &Neighbours,
-        prior: f32,
-        direct: &[f32],
-    ) -> (Vec<Rgb>, Vec<f32>) {
+    /// Windows (per side) and temporally pooled indirect and caustic sums around the
+    /// frame at index `c` of `self.frames`.
+    fn pool(&self, c: usize) -> (Vec<Pooled>, Vec<Pooled>, Vec<(u32, u32)>) {
         let s = &self.settings;
-        let inv_n = 1.0 / pooled.photons.max(1) as f32;
-        let est = |slot: usize| {
-            if area[slot] > 0.0 {
-                luminance(pooled.flux[slot]) * inv_n / area[slot]
-            } else {
-                0.0
+        let fr = &self.frames;
+        let cur = &fr[c];
+        let n_slots = cur.stat.len();
+        let inv2s2 = 1.0 / (2.0 * s.temporal_sigma.max(1e-3).powi(2));
+        let weights: Vec<f32> = fr
+            .iter()
+            .map(|t| {
+                let dt = t.frame as f32 - cur.frame as f32;
+                (-dt * dt * inv2s2).exp()
+            })
+            .collect();
+        let rows = parallel::map_chunks(n_slots, 4096, |range| {
+            let mut series = Vec::with_capacity(fr.len());
+            let mut out = Vec::with_capacity(range.len());
+            for slot in range {
+                series.clear();
+                series.extend(fr.iter().map(|t| (t.stat[slot], t.stat_var[slot])));
+                let tol = s.change_weber * (cur.stat[slot] + cur.direct[slot]).max(0.0);
+                let (lo, hi) = choose_window(&series, c, s.change_threshold, tol);
+                let (mut ind, mut cau) = (Pooled::default(), Pooled::default());
+                for k in lo..=hi {
+                    let t = &fr[k];
+                    let a = t.area[slot / 2];
+                    if a <= 0.0 {
+                        continue;
+                    }
+                    let w = weights[k];
+                    let na = w * t.photons.photons() as f32 * a;
+                    for (p, acc) in [
+                        (&mut ind, &t.photons.indirect),
+                        (&mut cau, &t.photons.caustic),
+                    ] {
+                        p.flux += acc.flux[slot] * w;
+                        p.na += na;
+                        p.sq += acc.flux_sq[slot] * w * w;
+                        p.count += acc.count[slot];
+                    }
+                }
+                out.push((ind, cau, (fr[lo].frame, fr[hi].frame)));
             }
-        };
-        let sig = |slot: usize| {
-            if area[slot] > 0.0 {
-                pooled.flux_sq[slot].sqrt() * inv_n / area[slot]
-            } else {
-                0.0
-            }
-        };
+            out
+        });
+        let mut ind = Vec::with_capacity(n_slots);
+        let mut cau = Vec::with_capacity(n_slots);
+        let mut win = Vec::with_capacity(n_slots);
+        for (i, c, w) in rows.into_iter().flatten() {
+            ind.push(i);
+            cau.push(c);
+            win.push(w);
+        }
+        (ind, cau, win)
+    }
+
+    /// Spatial bilateral filter of pooled sums: irradiance per element side and the
+    /// standard error of its luminance, with `prior` (one phantom photon's Σφ², see
+    /// [`crate::dept::reconstruct::filter_with_sigma`]) added to every side's Σφ².
+    fn complete(&self, p: &[Pooled], nb: &Neighbours, prior: f32) -> (Vec<Rgb>, Vec<f32>) {
+        let s = &self.settings;
         let sigma_s = 0.5 * nb.radius;
         let inv2s2 = 1.0 / (2.0 * sigma_s * sigma_s).max(1e-12);
-        let n = fe.area.len();
+        let n = p.len() / 2;
         let rows = parallel::map_chunks(n, 1024, |range| {
             let mut out = Vec::with_capacity(2 * range.len());
             for e in range {
                 for side in 0..2 {
                     let se = 2 * e + side;
-                    if area[se] > 0.0 && self.enough(pooled.count[se], est(se), sig(se), direct[se])
-                    {
-                        out.push(if area[se] > 0.0 {
-                            (
-                                pooled.flux[se] * (inv_n / area[se]),
-                                (pooled.flux_sq[se] + prior).sqrt() * inv_n / area[se],
-                            )
-                        } else {
-                            (Rgb::ZERO, 0.0)
-                        });
-                        continue;
-                    }
-                    let relax = pooled.count[se] < s.min_photons;
+                    let (ce, cs) = (p[se].lum(), p[se].sigma());
+                    let relax = p[se].count < s.min_photons;
                     let (mut num, mut den, mut sq) = (Rgb::ZERO, 0.0f32, 0.0f32);
                     for &(j, d2) in nb.of(e) {
-                        let sj = 2 * j as usize + side;
-                        let w = range_weight(est(se), est(sj), sig(se), sig(sj), s.kappa, relax)
+                        let q = &p[2 * j as usize + side];
+                        if q.na <= 0.0 {
+                            continue;
+                        }
+                        let w = range_weight(ce, q.lum(), cs, q.sigma(), s.kappa, relax)
                             * (-d2 * inv2s2).exp();
-                        num += pooled.flux[sj] * w;
-                        den += area[sj] * w;
-                        sq += (pooled.flux_sq[sj] + prior) * w * w;
+                        num += q.flux * w;
+                        den += q.na * w;
+                        sq += (q.sq + prior) * w * w;
                     }
                     out.push(if den > 0.0 {
-                        (num * (inv_n / den), sq.sqrt() * inv_n / den)
+                        (num / den, sq.sqrt() / den)
                     } else {
                         (Rgb::ZERO, 0.0)
                     });
@@ -305,6 +477,38 @@ impl SpacetimeDept {
             out
         });
         rows.into_iter().flatten().unzip()
+    }
+
+    /// Traces the frames of `frame`'s window that are not traced yet, and forgets the
+    /// frames that left it.
+    fn trace_window(&mut self, source: &mut FrameSource, frame: u32, scene: &FrameScene) {
+        let s = self.settings.clone();
+        let window = source.window(frame, s.window, s.window);
+        self.frames.retain(|t| window.contains(&t.frame));
+        let mesh = self.mesh.take().expect("mesh");
+        for g in window {
+            if self.frames.iter().any(|t| t.frame == g) {
+                continue;
+            }
+            let sg = if g == frame {
+                None
+            } else {
+                Some(source.frame(g))
+            };
+            let sc = sg.as_deref().unwrap_or(scene);
+            // A frame whose topology differs cannot share element ids: left out.
+            if !mesh.matches(sc) {
+                continue;
+            }
+            let fe = FrameElements::new(sc, &mesh);
+            let mut t = Traced::new(g, &mesh, &fe);
+            let (base, n) = self.first_photons(g);
+            deposit_more_photons(sc, &mesh, base..base + n, s.seed, &mut t.photons);
+            t.analyse(&mesh, &fe, s.change_radius);
+            let at = self.frames.partition_point(|x| x.frame < g);
+            self.frames.insert(at, t);
+        }
+        self.mesh = Some(mesh);
     }
 }
 
@@ -315,63 +519,44 @@ impl SequenceRenderer for SpacetimeDept {
 
     fn render_frame(
         &mut self,
-        source: &mut chronolux_core::scene::source::FrameSource,
+        source: &mut FrameSource,
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
+        let s = self.settings.clone();
+        // The output frame's scene stays cached while the look-ahead builds K more.
+        source.reserve(s.window as usize + 2);
         let scene = source.frame(frame);
         let scene = &*scene;
-        let s = self.settings.clone();
         if !self.mesh.as_ref().is_some_and(|m| m.matches(scene)) {
             self.mesh = Some(ElementMesh::build(scene, s.elements));
-            self.history.clear();
+            self.frames.clear();
         }
+        // Frames must arrive in increasing order; a jump back restarts.
+        if self.last_output.is_some_and(|l| l >= frame) {
+            self.frames.clear();
+        }
+        self.last_output = Some(frame);
+        self.trace_window(source, frame, scene);
         let mesh = self.mesh.take().expect("mesh");
         let fe = FrameElements::new(scene, &mesh);
-        // Frames must arrive in increasing order; a jump back restarts the history.
-        if self.history.back().is_some_and(|h| h.frame >= frame) {
-            self.history.clear();
-        }
-        self.history.push_back(HistoryFrame {
-            frame,
-            photons: FramePhotons::new(mesh.element_count()),
-            area: fe.area.clone(),
-        });
-        while self.history.len() > s.window as usize + 1 {
-            self.history.pop_front();
-        }
+        let c = self
+            .frames
+            .iter()
+            .position(|t| t.frame == frame)
+            .expect("output frame traced");
         let nb = Neighbours::new(&fe, s.radius * mesh.element_size);
-        // Fixed count: photons `frame·N ..`; stopping rule: the first of
-        // `frame·max_photons ..`, in batches, judged on the space-time reconstruction.
-        let (base, mut total) = match s.auto {
-            None => (frame as u64 * s.photons, s.photons),
-            Some(a) => (
-                frame as u64 * a.max_photons,
-                a.batch.clamp(1, a.max_photons.max(1)),
-            ),
-        };
-        let (ind, cau) = loop {
-            let cur = &mut self.history.back_mut().expect("current frame").photons;
-            let done = cur.photons();
-            deposit_more_photons(scene, &mesh, base + done..base + total, s.seed, cur);
-            let inv_n = 1.0 / cur.photons().max(1) as f32;
-            let prior_i = prior_sq(&cur.indirect) * inv_n * inv_n;
-            let prior_c = prior_sq(&cur.caustic) * inv_n * inv_n;
-            let (direct, _) = filtered_irradiance_sigma(
-                &mesh,
-                &cur.direct,
-                &fe,
-                Filter::Gaussian { radius: 2.5 },
-            );
-            let direct = luminances(&direct);
-            let (ind, ind_area) = self.pool(|p| &p.indirect, &direct);
-            let (cau, cau_area) = self.pool(|p| &p.caustic, &direct);
-            let (ind, si) = self.complete(&ind, &ind_area, &fe, &nb, prior_i, &direct);
-            let (cau, sc) = self.complete(&cau, &cau_area, &fe, &nb, prior_c, &direct);
+        let (ind, cau, window) = loop {
+            let (pi, pc, window) = self.pool(c);
+            let cur = &self.frames[c].photons;
+            let prior_i = prior_sq(&cur.indirect);
+            let prior_c = prior_sq(&cur.caustic);
+            let (ind, si) = self.complete(&pi, &nb, prior_i);
+            let (cau, sc) = self.complete(&pc, &nb, prior_c);
             let Some(rule) = s.auto else {
-                break (ind, cau);
+                break (ind, cau, window);
             };
-            let cur = &self.history.back().expect("current frame").photons;
+            let total = cur.photons();
             let a = assess_frame(&rule, &mesh, &fe, cur, &ind, &cau, &si, &sc);
             log::debug!(
                 "spacetime-dept frame {frame}: {total} photons, {:.1} % of the power-weighted surface above the {} contrast threshold, {} photons predicted",
@@ -380,17 +565,51 @@ impl SequenceRenderer for SpacetimeDept {
                 a.predicted_photons
             );
             match next_total(&rule, total, &a) {
-                Some(t) => total = t,
-                None => break (ind, cau),
+                Some(t) => {
+                    let base = frame as u64 * rule.max_photons.max(1);
+                    let tr = &mut self.frames[c];
+                    deposit_more_photons(
+                        scene,
+                        &mesh,
+                        base + total..base + t,
+                        s.seed,
+                        &mut tr.photons,
+                    );
+                    tr.analyse(&mesh, &fe, s.change_radius);
+                }
+                None => break (ind, cau, window),
             }
         };
-        let photon_rays = self
-            .history
-            .back()
-            .expect("current frame")
-            .photons
-            .stats
-            .rays;
+        if log::log_enabled!(log::Level::Debug) {
+            // Power-weighted mean window length and fraction of whole windows.
+            let whole = source.window(frame, s.window, s.window);
+            let whole = (whole[0], *whole.last().expect("frame in its window"));
+            let (mut w, mut len, mut full) = (0.0f64, 0.0f64, 0.0f64);
+            for (slot, win) in window.iter().enumerate() {
+                let p = (fe.area[slot / 2] * luminance(ind[slot] + cau[slot])) as f64;
+                if p > 0.0 {
+                    w += p;
+                    len += p * (win.1 - win.0 + 1) as f64;
+                    full += p * (*win == whole) as u8 as f64;
+                }
+            }
+            log::debug!(
+                "spacetime-dept frame {frame}: power-weighted mean window {:.2} frames, {:.1} % of the power with the whole window {}..={}",
+                len / w.max(1e-30),
+                100.0 * full / w.max(1e-30),
+                whole.0,
+                whole.1
+            );
+        }
+        let cur = &self.frames[c];
+        self.last_photons = Some(cur.photons.photons());
+        let photon_rays = cur.photons.stats.rays;
+        self.info = Some(SpacetimeFrameInfo {
+            frame,
+            window,
+            irradiance: ind.iter().zip(&cau).map(|(a, b)| *a + *b).collect(),
+            area: fe.area.clone(),
+        });
         let indirect = ElementSolution::from_elements(&mesh, &fe, &ind);
         let caustic = ElementSolution::from_elements(&mesh, &fe, &cau);
         let mut img = render_view(
@@ -408,6 +627,58 @@ impl SequenceRenderer for SpacetimeDept {
     }
 
     fn photons_last_frame(&self) -> Option<u64> {
-        self.history.back().map(|h| h.photons.photons())
+        self.last_photons
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Deterministic "noise" in [−1, 1] (no RNG dependency in unit tests).
+    fn wobble(k: usize) -> f32 {
+        ((k as f32 * 12.9898).sin() * 43758.547).fract() * 2.0 - 1.0
+    }
+
+    #[test]
+    fn static_series_keeps_the_whole_window() {
+        // 9 frames of a constant 1.0 with ±1σ noise (σ = 0.05), threshold 3σ.
+        let series: Vec<(f32, f32)> = (0..9).map(|k| (1.0 + 0.05 * wobble(k), 0.0025)).collect();
+        for c in 0..9 {
+            assert_eq!(choose_window(&series, c, 3.0, 0.02), (0, 8), "centre {c}");
+        }
+    }
+
+    #[test]
+    fn a_step_cuts_the_window_on_both_sides_of_it() {
+        // A 30 % drop between frames 4 and 5 with a per-frame σ of 12 %: the drop is only
+        // 1.8 σ of a single-frame difference (the per-element test missed such steps),
+        // but the frames on the two sides of the step pooled make it 30 % against
+        // σ = 0.12·√(1/5 + 1/5) = 0.076, i.e. 3.9 σ > 3.
+        let sigma = 0.12f32;
+        let series: Vec<(f32, f32)> = (0..10)
+            .map(|k| {
+                let v = if k < 5 { 1.0 } else { 0.7 };
+                (v + 0.3 * sigma * wobble(k), sigma * sigma)
+            })
+            .collect();
+        for c in 0..10 {
+            let (lo, hi) = choose_window(&series, c, 3.0, 0.02);
+            if c < 5 {
+                assert!(hi <= 4, "centre {c}: pooled up to {hi} across the step");
+            } else {
+                assert!(lo >= 5, "centre {c}: pooled down to {lo} across the step");
+            }
+        }
+    }
+
+    #[test]
+    fn invisible_changes_are_pooled() {
+        // A 1 % step, far below the 2 % visibility threshold, with no noise: pooled.
+        let series: Vec<(f32, f32)> = (0..7)
+            .map(|k| (if k < 3 { 1.0 } else { 1.01 }, 1e-8))
+            .collect();
+        assert_eq!(choose_window(&series, 3, 3.0, 0.02), (0, 6));
+        assert_eq!(choose_window(&series, 3, 3.0, 0.005), (3, 6));
     }
 }

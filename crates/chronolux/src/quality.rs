@@ -21,9 +21,9 @@ use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::read_exr;
 use chronolux_render::dept::DeptSettings;
 use chronolux_render::pt::PathSettings;
-use chronolux_render::temporal::stbpt::StbptSettings;
 use chronolux_render::registry::TechniqueConfig;
 use chronolux_render::temporal::spacetime_dept::SpacetimeSettings;
+use chronolux_render::temporal::stbpt::StbptSettings;
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -309,7 +309,8 @@ pub fn run(args: QualityArgs) -> Result<()> {
         let mut reached: Vec<Option<Level>> = vec![None; targets.len()];
         let mut effort = args.start_effort;
         loop {
-            let mut renderer = config_for(m, effort, args.max_depth, args.seed, args.window)?.build();
+            let mut renderer =
+                config_for(m, effort, args.max_depth, args.seed, args.window)?.build();
             let builder =
                 FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
             let mut source = FrameSource::new(builder, args.fps, frames.clone());

@@ -32,7 +32,10 @@ fn stbpt_writes_reuse_statistics_into_run_json() {
         assert_eq!(reuse["window"], window, "frame {f}: {reuse}");
         // Own samples (256) plus those landed from the neighbours.
         let eff = reuse["effective_spp"].as_f64().unwrap();
-        assert!(eff > 1.0 && eff <= window as f64 + 1e-9, "frame {f}: {reuse}");
+        assert!(
+            eff > 1.0 && eff <= window as f64 + 1e-9,
+            "frame {f}: {reuse}"
+        );
         let served = reuse["reused"].as_u64().unwrap() + reuse["retraced"].as_u64().unwrap();
         assert!(served > 0, "frame {f}: {reuse}");
         let factor = reuse["reuse_factor"].as_f64().unwrap();

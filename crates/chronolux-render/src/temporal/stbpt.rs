@@ -43,6 +43,13 @@
 //!    generation, and an occluded connection contributes 0 in that frame. The value in g
 //!    is `Le(x1 → wo_g)·w_e + Σ_k V_k(g) f(x1, wo_g, wi_k) ⊙ R_k`: only x1's BSDF and
 //!    emission are re-evaluated.
+//!    **Partial reuse** when only the light subpath is invalid in g (x1 and every camera
+//!    segment reproduced, same lights and materials): the strategies without light-subpath
+//!    vertices (s ≤ 1: emission, NEE, camera paths hitting a light) are reused as above,
+//!    and the strategies s ≥ 2 are recomputed in g's scene by connecting f's camera
+//!    subpath (which is g's walk too) to the light subpath regenerated in g, split at x1
+//!    the same way. Each strategy's weighted contribution is an unbiased estimate of its
+//!    share on its own, so mixing f's s ≤ 1 terms with g's s ≥ 2 terms is unbiased.
 //! 3. **Re-trace** otherwise: a fresh BDPT evaluation in g's scene, of the same streams,
 //!    for a camera ray through the raster position where x1 landed. A sample invalid for
 //!    g never contributes a stale value; re-tracing (instead of dropping) keeps the
@@ -55,6 +62,15 @@
 //!    are the same too: f's splats are reused, each where its shadow ray (answered for
 //!    the window at generation) is unoccluded in g. Frame g's splats are scaled by
 //!    1 / (spp × frames of g's window).
+//!
+//! # Cost
+//!
+//! Both subpaths are traced through the window structure itself
+//! ([`MultiFrameAccel::intersect_window`], whose answer for f equals f's own query), so each
+//! segment's validity over the window costs no second traversal. x1's landing visibility
+//! is one [`MultiFrameAccel::occluded_window`] query for every frame in which x1 and the
+//! eye are where they were in f (static object, static camera position), one ray per
+//! frame otherwise.
 //!
 //! Pixel value of g: Σ values / Σ landed samples per pixel ([`WindowFilm`]), plus the
 //! scaled splats.
@@ -260,10 +276,10 @@ fn window_trace<'a>(
     rays: Option<&'a mut Vec<Ray>>,
 ) -> impl FnMut(&Ray) -> Option<Hit> + 'a {
     masks.clear();
-    let mut rays = rays.map(|r| {
+    let mut rays = rays;
+    if let Some(r) = rays.as_deref_mut() {
         r.clear();
-        r
-    });
+    }
     let all = mfa.all_frames();
     move |ray| {
         if let Some(r) = rays.as_deref_mut() {

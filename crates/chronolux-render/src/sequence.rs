@@ -39,6 +39,9 @@ pub struct ReuseStats {
     /// Samples from other frames served by reusing their view-independent part / by
     /// re-tracing them in this frame.
     pub reused: u64,
+    /// Of `reused`: those whose light subpath was invalid in this frame (only the
+    /// strategies without light-subpath vertices reused, the others recomputed here).
+    pub reused_partially: u64,
     pub retraced: u64,
     /// Mean number of frames served by each sample generated for this frame.
     pub reuse_factor: f64,

@@ -23,6 +23,7 @@ use chronolux_render::dept::DeptSettings;
 use chronolux_render::pt::PathSettings;
 use chronolux_render::registry::TechniqueConfig;
 use chronolux_render::temporal::spacetime_dept::SpacetimeSettings;
+use chronolux_render::temporal::stbpt::StbptSettings;
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -72,6 +73,10 @@ pub struct QualityArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+    /// Half-width K of the reuse window of `stbpt` (samples serve [f − K, f + K]).
+    /// Default: the method's default (4). Recorded in the JSON.
+    #[arg(long, value_name = "K")]
+    pub window: Option<u32>,
     /// Write a Markdown report (tables of every effort level) to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
@@ -106,10 +111,26 @@ pub struct MethodResult {
     /// method's time by up to a whole doubling, depending only on where the grid falls;
     /// this removes that. `None` when the target is not bracketed.
     pub interpolated_time_s: Vec<Option<f64>>,
+    /// The same in process CPU seconds (the comparison to use on a shared, loaded machine).
+    pub interpolated_cpu_s: Vec<Option<f64>>,
 }
 
 /// Wall time at which `levels` (in increasing effort) reach `target`, log-log interpolated.
 pub fn interpolate_time(levels: &[Level], target: f64, criterion: &str) -> Option<f64> {
+    interpolate_by(levels, target, criterion, |l| l.wall_s)
+}
+
+/// CPU seconds at which `levels` reach `target`, interpolated as [`interpolate_time`].
+pub fn interpolate_cpu(levels: &[Level], target: f64, criterion: &str) -> Option<f64> {
+    interpolate_by(levels, target, criterion, |l| l.cpu_s)
+}
+
+fn interpolate_by(
+    levels: &[Level],
+    target: f64,
+    criterion: &str,
+    time: impl Fn(&Level) -> f64,
+) -> Option<f64> {
     let err = |l: &Level| {
         if criterion == "max" {
             l.flip_max
@@ -119,15 +140,16 @@ pub fn interpolate_time(levels: &[Level], target: f64, criterion: &str) -> Optio
     };
     let k = levels.iter().position(|l| err(l) <= target)?;
     if k == 0 {
-        return (err(&levels[0]) == target).then_some(levels[0].wall_s);
+        return (err(&levels[0]) == target).then_some(time(&levels[0]));
     }
     let (lo, hi) = (&levels[k - 1], &levels[k]);
     let (e0, e1) = (err(lo), err(hi));
-    if !(e0 > e1 && e1 > 0.0 && lo.wall_s > 0.0 && hi.wall_s > 0.0) {
-        return Some(hi.wall_s);
+    let (t0, t1) = (time(lo), time(hi));
+    if !(e0 > e1 && e1 > 0.0 && t0 > 0.0 && t1 > 0.0) {
+        return Some(t1);
     }
     let s = (e0 / target).ln() / (e0 / e1).ln();
-    Some(lo.wall_s * (hi.wall_s / lo.wall_s).powf(s))
+    Some(t0 * (t1 / t0).powf(s))
 }
 
 /// The whole result; the flat fields are for the first target.
@@ -147,6 +169,12 @@ pub struct QualityResult {
     pub method_time_interp_s: Option<f64>,
     pub baseline_time_interp_s: Option<f64>,
     pub speedup_interp: Option<f64>,
+    /// The same in process CPU seconds.
+    pub method_cpu_interp_s: Option<f64>,
+    pub baseline_cpu_interp_s: Option<f64>,
+    pub speedup_cpu_interp: Option<f64>,
+    /// `--window` (stbpt's K), when given.
+    pub window: Option<u32>,
     pub method_flicker: Option<f64>,
     pub baseline_flicker: Option<f64>,
     pub targets: Vec<f64>,
@@ -171,6 +199,7 @@ pub fn config_for(
     effort: u32,
     max_depth: Option<u32>,
     seed: u64,
+    window: Option<u32>,
 ) -> Result<TechniqueConfig> {
     Ok(match method {
         "path" => TechniqueConfig::Path(PathSettings {
@@ -193,6 +222,7 @@ pub fn config_for(
                 seed,
                 ..Default::default()
             },
+            window: window.unwrap_or(StbptSettings::default().window),
             ..Default::default()
         }),
         // Photon methods: effort = thousands of photons per frame (the per-frame budget
@@ -270,7 +300,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
     let mut methods = vec![args.method.clone()];
     methods.extend(args.baseline.clone());
     for m in &methods {
-        config_for(m, 1, None, 0)?;
+        config_for(m, 1, None, 0, args.window)?;
     }
     let hdr = flip::HdrSettings::default();
 
@@ -280,7 +310,8 @@ pub fn run(args: QualityArgs) -> Result<()> {
         let mut reached: Vec<Option<Level>> = vec![None; targets.len()];
         let mut effort = args.start_effort;
         loop {
-            let mut renderer = config_for(m, effort, args.max_depth, args.seed)?.build();
+            let mut renderer =
+                config_for(m, effort, args.max_depth, args.seed, args.window)?.build();
             let builder =
                 FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
             let mut source = FrameSource::new(builder, args.fps, frames.clone());
@@ -349,11 +380,16 @@ pub fn run(args: QualityArgs) -> Result<()> {
             .iter()
             .map(|t| interpolate_time(&levels, *t, &args.criterion))
             .collect();
+        let interpolated_cpu_s = targets
+            .iter()
+            .map(|t| interpolate_cpu(&levels, *t, &args.criterion))
+            .collect();
         results.push(MethodResult {
             method: m.clone(),
             levels,
             reached,
             interpolated_time_s,
+            interpolated_cpu_s,
         });
     }
 
@@ -363,6 +399,9 @@ pub fn run(args: QualityArgs) -> Result<()> {
     let time = |r: &MethodResult, k: usize| r.reached[k].as_ref().map(|l| l.wall_s);
     let flick = |r: &MethodResult, k: usize| r.reached[k].as_ref().and_then(|l| l.flicker);
     let interp = |r: &MethodResult, k: usize| r.interpolated_time_s[k];
+    let cpu = |r: &MethodResult, k: usize| r.interpolated_cpu_s[k];
+    let method_cpu_interp_s = cpu(&results[0], k0);
+    let baseline_cpu_interp_s = results.get(1).and_then(|r| cpu(r, k0));
     let method_time_interp_s = interp(&results[0], k0);
     let baseline_time_interp_s = results.get(1).and_then(|r| interp(r, k0));
     let method_time_s = time(&results[0], k0);
@@ -385,6 +424,13 @@ pub fn run(args: QualityArgs) -> Result<()> {
             (Some(a), Some(b)) if a > 0.0 => Some(b / a),
             _ => None,
         },
+        method_cpu_interp_s,
+        baseline_cpu_interp_s,
+        speedup_cpu_interp: match (method_cpu_interp_s, baseline_cpu_interp_s) {
+            (Some(a), Some(b)) if a > 0.0 => Some(b / a),
+            _ => None,
+        },
+        window: args.window,
         method_flicker: flick(&results[0], k0),
         baseline_flicker: results.get(1).and_then(|r| flick(r, k0)),
         targets: targets.clone(),
@@ -427,14 +473,14 @@ pub fn markdown(r: &QualityResult) -> String {
         );
     }
     if r.results.len() == 2 {
-        s += " speed-up | speed-up interpolated |";
+        s += " speed-up | speed-up interpolated | speed-up CPU interpolated |";
     }
     s += "\n|---|";
     for _ in &r.results {
         s += "---|---|---|---|";
     }
     if r.results.len() == 2 {
-        s += "---|---|";
+        s += "---|---|---|";
     }
     s += "\n";
     for (k, t) in r.targets.iter().enumerate() {
@@ -466,6 +512,16 @@ pub fn markdown(r: &QualityResult) -> String {
                 match (
                     r.results[0].interpolated_time_s[k],
                     r.results[1].interpolated_time_s[k]
+                ) {
+                    (Some(a), Some(b)) if a > 0.0 => format!("{:.2}×", b / a),
+                    _ => "-".into(),
+                }
+            );
+            s += &format!(
+                " {} |",
+                match (
+                    r.results[0].interpolated_cpu_s[k],
+                    r.results[1].interpolated_cpu_s[k]
                 ) {
                     (Some(a), Some(b)) if a > 0.0 => format!("{:.2}×", b / a),
                     _ => "-".into(),

@@ -21,6 +21,7 @@ pub mod connect;
 pub mod vertex;
 
 use crate::integrator::{Integrator, RenderedFrame, SplattingEstimator, render_with_splats};
+use chronolux_core::accel::Hit;
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
 use chronolux_core::geometry::{Ray, spawn_ray};
@@ -88,7 +89,7 @@ impl BdptSettings {
 /// Extends `path` (whose last vertex emitted `ray` with solid-angle density `pdf`) by
 /// BSDF sampling, adding at most `max_vertices` vertices. Returns nothing; `path` grows.
 #[allow(clippy::too_many_arguments)] // reason: the walk's full state, as pbrt's RandomWalk
-fn random_walk(
+fn random_walk<T: FnMut(&Ray) -> Option<Hit>>(
     scene: &FrameScene,
     settings: &BdptSettings,
     mut ray: Ray,
@@ -99,7 +100,7 @@ fn random_walk(
     sampler: &mut PixelSampler,
     path: &mut Vec<Vertex>,
     stats: &mut Stats,
-    mut rays: Option<&mut Vec<Ray>>,
+    trace: &mut T,
 ) {
     if max_vertices == 0 {
         return;
@@ -111,11 +112,8 @@ fn random_walk(
     let mut eta_scale = 1.0f32;
     loop {
         stats.rays += 1;
-        if let Some(r) = rays.as_deref_mut() {
-            r.push(ray);
-        }
         let prev = path.last().expect("a walk starts at an endpoint");
-        let Some(hit) = scene.intersect(&ray) else {
+        let Some(hit) = trace(&ray) else {
             if mode == TransportMode::Radiance && scene.environment.is_some() {
                 let mut v = Vertex::light(
                     scene,
@@ -203,25 +201,25 @@ pub fn generate_camera_subpath(
     path: &mut Vec<Vertex>,
     stats: &mut Stats,
 ) {
-    generate_camera_subpath_traced(scene, settings, raster, sampler, path, stats, None);
+    generate_camera_subpath_with(scene, settings, raster, sampler, path, stats, &mut |r| {
+        scene.intersect(r)
+    });
 }
 
-/// [`generate_camera_subpath`], also recording in `rays` (cleared) every ray the walk
-/// traced, in order: ray `k` leaves vertex `k`; it reached vertex `k + 1` when that is a
-/// surface vertex, else it escaped the scene (the sample-reusing technique checks each
-/// segment, escapes included, against other frames' geometry).
-pub fn generate_camera_subpath_traced(
+/// [`generate_camera_subpath`], answering each ray the walk traces with `trace` instead of
+/// `scene.intersect` (which `trace` must equal for this frame), in order: ray `k` leaves
+/// vertex `k`; it reached vertex `k + 1` when that is a surface vertex, else it escaped the
+/// scene. The sample-reusing technique answers them for every frame of its window at once
+/// (one multi-frame query per segment instead of a per-frame trace plus a window check).
+pub fn generate_camera_subpath_with<T: FnMut(&Ray) -> Option<Hit>>(
     scene: &FrameScene,
     settings: &BdptSettings,
     raster: Vec2,
     sampler: &mut PixelSampler,
     path: &mut Vec<Vertex>,
     stats: &mut Stats,
-    mut rays: Option<&mut Vec<Ray>>,
+    trace: &mut T,
 ) {
-    if let Some(r) = rays.as_deref_mut() {
-        r.clear();
-    }
     path.clear();
     let max_depth = settings.depth();
     if max_depth == 0 {
@@ -243,7 +241,7 @@ pub fn generate_camera_subpath_traced(
         sampler,
         path,
         stats,
-        rays,
+        trace,
     );
 }
 
@@ -264,22 +262,21 @@ pub fn generate_light_subpath(
     path: &mut Vec<Vertex>,
     stats: &mut Stats,
 ) {
-    generate_light_subpath_traced(scene, settings, sampler, path, stats, None);
+    generate_light_subpath_with(scene, settings, sampler, path, stats, &mut |r| {
+        scene.intersect(r)
+    });
 }
 
-/// [`generate_light_subpath`], also recording the traced rays in `rays` (cleared), as
-/// [`generate_camera_subpath_traced`] does.
-pub fn generate_light_subpath_traced(
+/// [`generate_light_subpath`], answering the traced rays with `trace`, as
+/// [`generate_camera_subpath_with`] does.
+pub fn generate_light_subpath_with<T: FnMut(&Ray) -> Option<Hit>>(
     scene: &FrameScene,
     settings: &BdptSettings,
     sampler: &mut PixelSampler,
     path: &mut Vec<Vertex>,
     stats: &mut Stats,
-    mut rays: Option<&mut Vec<Ray>>,
+    trace: &mut T,
 ) {
-    if let Some(r) = rays.as_deref_mut() {
-        r.clear();
-    }
     path.clear();
     let u_light = sampler.next_1d();
     let u_pos = sampler.next_2d();
@@ -326,7 +323,7 @@ pub fn generate_light_subpath_traced(
         sampler,
         path,
         stats,
-        rays,
+        trace,
     );
     if infinite {
         if path.len() > 1 {

@@ -43,6 +43,13 @@
 //!    generation, and an occluded connection contributes 0 in that frame. The value in g
 //!    is `Le(x1 → wo_g)·w_e + Σ_k V_k(g) f(x1, wo_g, wi_k) ⊙ R_k`: only x1's BSDF and
 //!    emission are re-evaluated.
+//!    **Partial reuse** when only the light subpath is invalid in g (x1 and every camera
+//!    segment reproduced, same lights and materials): the strategies without light-subpath
+//!    vertices (s ≤ 1: emission, NEE, camera paths hitting a light) are reused as above,
+//!    and the strategies s ≥ 2 are recomputed in g's scene by connecting f's camera
+//!    subpath (which is g's walk too) to the light subpath regenerated in g, split at x1
+//!    the same way. Each strategy's weighted contribution is an unbiased estimate of its
+//!    share on its own, so mixing f's s ≤ 1 terms with g's s ≥ 2 terms is unbiased.
 //! 3. **Re-trace** otherwise: a fresh BDPT evaluation in g's scene, of the same streams,
 //!    for a camera ray through the raster position where x1 landed. A sample invalid for
 //!    g never contributes a stale value; re-tracing (instead of dropping) keeps the
@@ -55,6 +62,15 @@
 //!    are the same too: f's splats are reused, each where its shadow ray (answered for
 //!    the window at generation) is unoccluded in g. Frame g's splats are scaled by
 //!    1 / (spp × frames of g's window).
+//!
+//! # Cost
+//!
+//! Both subpaths are traced through the window structure itself
+//! ([`MultiFrameAccel::intersect_window`], whose answer for f equals f's own query), so each
+//! segment's validity over the window costs no second traversal. x1's landing visibility
+//! is one [`MultiFrameAccel::occluded_window`] query for every frame in which x1 and the
+//! eye are where they were in f (static object, static camera position), one ray per
+//! frame otherwise.
 //!
 //! Pixel value of g: Σ values / Σ landed samples per pixel ([`WindowFilm`]), plus the
 //! scaled splats.
@@ -122,15 +138,16 @@
 
 use crate::bdpt::{
     BdptSettings, Vertex, VertexKind, connect, connect_with, generate_camera_subpath,
-    generate_camera_subpath_traced, generate_light_subpath, generate_light_subpath_traced,
-    mis_weight,
+    generate_camera_subpath_with, generate_light_subpath, generate_light_subpath_with, mis_weight,
 };
 use crate::integrator::{RenderedFrame, TILE};
 use crate::sequence::{ReuseStats, SequenceRenderer};
 use crate::temporal::blur::{TrajectoryVertex, splat_trajectory};
 use crate::temporal::window_film::{Contribution, FilmStats, WindowFilm};
 use chronolux_core::accel::Hit;
-use chronolux_core::accel::multi_frame::{FrameMask, MAX_WINDOW_FRAMES, MultiFrameAccel};
+use chronolux_core::accel::multi_frame::{
+    FrameMask, MAX_WINDOW_FRAMES, MultiFrameAccel, WindowHit,
+};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::{Ray, spawn_ray_to};
@@ -201,6 +218,9 @@ struct Counts {
     landed: Vec<u64>,
     /// Of those, served by reuse of the view-independent part / by re-tracing.
     reused: Vec<u64>,
+    /// Of the reused: only the strategies s ≤ 1 (the light subpath changed in g; the
+    /// strategies s ≥ 2 were recomputed with g's light subpath).
+    partial: Vec<u64>,
     retraced: Vec<u64>,
     invalid: Vec<u64>,
 }
@@ -210,6 +230,7 @@ impl Counts {
         Counts {
             landed: vec![0; n],
             reused: vec![0; n],
+            partial: vec![0; n],
             retraced: vec![0; n],
             invalid: vec![0; n],
         }
@@ -219,6 +240,7 @@ impl Counts {
         for (a, b) in [
             (&mut self.landed, &o.landed),
             (&mut self.reused, &o.reused),
+            (&mut self.partial, &o.partial),
             (&mut self.retraced, &o.retraced),
             (&mut self.invalid, &o.invalid),
         ] {
@@ -235,6 +257,7 @@ struct Pending {
     stats: Stats,
     landed: u64,
     reused: u64,
+    partial: u64,
     retraced: u64,
     invalid: u64,
 }
@@ -333,32 +356,33 @@ fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
     }
 }
 
-/// Window frames in which the traced `rays` of `path` are reproduced: ray k (from
-/// `first`) gives the same hit as in frame `jf`, and that hit is the vertex the walk made.
-fn reproduced(
-    mfa: &MultiFrameAccel,
-    scene: &FrameScene,
-    path: &[Vertex],
-    rays: &[Ray],
-    first: usize,
+/// Answers the rays of a subpath walked in window frame `jf` with one multi-frame query
+/// each: returns frame `jf`'s hit (exactly what `scene.intersect` gives: the structure's
+/// answers equal per-frame queries) and pushes to `masks` the window frames in which the
+/// ray gives that same hit, i.e. in which the segment is reproduced. This replaces tracing
+/// the walk in f and then checking every segment again against the window (one traversal
+/// per segment instead of two).
+fn window_trace<'a>(
+    mfa: &'a MultiFrameAccel,
+    scene: &'a FrameScene,
     jf: usize,
-    stats: &mut Stats,
-) -> FrameMask {
+    wh: &'a mut WindowHit,
+    masks: &'a mut Vec<FrameMask>,
+    rays: Option<&'a mut Vec<Ray>>,
+) -> impl FnMut(&Ray) -> Option<Hit> + 'a {
+    masks.clear();
+    let mut rays = rays;
+    if let Some(r) = rays.as_deref_mut() {
+        r.clear();
+    }
     let all = mfa.all_frames();
-    let own = 1u64 << jf;
-    let mut mask = all;
-    for (k, ray) in rays.iter().enumerate().skip(first) {
-        stats.rays += 1;
-        let wh = mfa.intersect_window(ray, all, |t, b1, b2| scene.accept(t, b1, b2));
-        let hf = wh.frame(jf);
-        let expected = path
-            .get(k + 1)
-            .filter(|v| v.kind == VertexKind::Surface)
-            .and_then(|v| v.surface.as_ref())
-            .map(|s| s.si.tri);
-        if hf.map(|h| h.tri) != expected {
-            return own;
+    move |ray| {
+        if let Some(r) = rays.as_deref_mut() {
+            r.push(*ray);
         }
+        mfa.intersect_window_into(ray, all, |t, b1, b2| scene.accept(t, b1, b2), wh);
+        let hf = wh.frame(jf);
+        let mut mask = all;
         if wh.differs != 0 {
             for j in 0..mfa.frame_count() {
                 if !same_hit(wh.frame(j), hf) {
@@ -366,11 +390,9 @@ fn reproduced(
                 }
             }
         }
-        if mask == own {
-            break;
-        }
+        masks.push(mask);
+        hf
     }
-    mask
 }
 
 /// Barycentrics (b1, b2) of world point `p` on triangle `tri` of instance `instance`.
@@ -483,6 +505,8 @@ fn splat_pixel_trajectories(
 
 /// One view-independent entry at x1.
 struct Entry {
+    /// Light vertices of the strategy: s ≤ 1 does not depend on the light subpath.
+    s: usize,
     wi: Vec3,
     r: Rgb,
     /// The contribution as computed in f (for f itself, no rounding from the split).
@@ -496,8 +520,11 @@ struct Entry {
 struct Scratch {
     cam: Vec<Vertex>,
     cam_rays: Vec<Ray>,
+    /// Per traced ray of the camera / light subpath: the window frames reproducing it.
+    cam_masks: Vec<FrameMask>,
+    light_masks: Vec<FrameMask>,
+    wh: WindowHit,
     light: Vec<Vertex>,
-    light_rays: Vec<Ray>,
     light_g: Vec<Vertex>,
     cam_g: Vec<Vertex>,
     entries: Vec<Entry>,
@@ -810,44 +837,50 @@ impl Generation<'_> {
         let cs0 = cs.clone();
         let ls0 = ls.clone();
         let st = &mut out.stats[jf];
-        generate_camera_subpath_traced(
+        generate_camera_subpath_with(
             scene_f,
             self.bdpt,
             raster,
             &mut cs,
             &mut sc.cam,
             st,
-            Some(&mut sc.cam_rays),
+            &mut window_trace(
+                self.mfa,
+                scene_f,
+                jf,
+                &mut sc.wh,
+                &mut sc.cam_masks,
+                Some(&mut sc.cam_rays),
+            ),
         );
-        generate_light_subpath_traced(
+        generate_light_subpath_with(
             scene_f,
             self.bdpt,
             &mut ls,
             &mut sc.light,
             st,
-            Some(&mut sc.light_rays),
+            &mut window_trace(self.mfa, scene_f, jf, &mut sc.wh, &mut sc.light_masks, None),
         );
         st.samples += 1;
         let (cam, light) = (&sc.cam, &sc.light);
         let max_segments = self.bdpt.depth() as usize;
 
         // Validity of the sampled segments in the other frames.
-        let light_valid = if n > 1 {
-            reproduced(self.mfa, scene_f, light, &sc.light_rays, 0, jf, st) & self.lights_same
-        } else {
-            all
-        };
+        let and = |m: &[FrameMask]| m.iter().fold(all, |a, b| a & b);
+        let light_valid = and(&sc.light_masks) & self.lights_same;
         let x1 = cam.get(1).filter(|v| v.kind == VertexKind::Surface);
+        // Camera segments after x1 reproduced (the camera subpath is the same walk in g).
+        let cam_segments = if x1.is_some() {
+            and(sc.cam_masks.get(1..).unwrap_or(&[])) & self.materials_same
+        } else {
+            1 << jf
+        };
         let cam_valid = if n > 1 && x1.is_some() {
-            reproduced(self.mfa, scene_f, cam, &sc.cam_rays, 1, jf, st)
-                & light_valid
-                & self.materials_same
-        } else if n > 1 && !sc.cam_rays.is_empty() {
+            cam_segments & light_valid
+        } else if n > 1 && !sc.cam_masks.is_empty() {
             // An escaped camera ray: its value (the environment, or nothing) is reused
             // where the same ray escapes too.
-            reproduced(self.mfa, scene_f, cam, &sc.cam_rays[..1], 0, jf, st)
-                & self.lights_same
-                & self.materials_same
+            sc.cam_masks[0] & self.lights_same & self.materials_same
         } else {
             1 << jf
         };
@@ -902,7 +935,13 @@ impl Generation<'_> {
                     if fv.y != 0.0 { l.y / fv.y } else { 0.0 },
                     if fv.z != 0.0 { l.z / fv.z } else { 0.0 },
                 );
-                sc.entries.push(Entry { wi, r, c: l, vis });
+                sc.entries.push(Entry {
+                    s,
+                    wi,
+                    r,
+                    c: l,
+                    vis,
+                });
             }
         }
 
@@ -929,6 +968,10 @@ impl Generation<'_> {
 
         // Other frames of the window.
         let x1_bary = x1.and_then(|v| barycentrics(scene_f, v));
+        let eye_f = scene_f.camera.position();
+        // Landing visibility of x1 from f's eye, answered once for the whole window (the
+        // same ray in every frame where x1 and the eye do not move).
+        let mut land_occ: Option<FrameMask> = None;
         for j in (0..n).filter(|&j| j != jf) {
             let scene_g = &self.scenes[j];
             let frame_g = self.frames[j];
@@ -970,7 +1013,8 @@ impl Generation<'_> {
                 continue;
             }
             let eye = cam_g.position();
-            let landing: Option<(Vec2, bool)> = match x1 {
+            // (raster, reuse everything, reuse the strategies s ≤ 1 only)
+            let landing: Option<(Vec2, bool, bool)> = match x1 {
                 None => {
                     // Escaped camera ray (or an environment vertex): lands where its
                     // direction projects; reused when g's camera is f's and the ray
@@ -979,7 +1023,7 @@ impl Generation<'_> {
                     sc.cam_rays
                         .first()
                         .and_then(|r| cam_g.project(eye + r.d.normalize()))
-                        .map(|r| (r, same_camera && cam_valid >> j & 1 == 1))
+                        .map(|r| (r, same_camera && cam_valid >> j & 1 == 1, false))
                 }
                 Some(v) => {
                     let sv = v.surface.as_ref().unwrap();
@@ -1006,8 +1050,22 @@ impl Generation<'_> {
                     let raster_g = cam_g.project(p);
                     match raster_g {
                         Some(r) if faces => {
-                            out.stats[j].shadow_rays += 1;
-                            if scene_g.occluded(&spawn_ray_to(p, ng, eye, Vec3::ZERO)) {
+                            let shared =
+                                !moved && eye == eye_f && self.materials_same >> j & 1 == 1;
+                            let occluded = if shared {
+                                let occ = *land_occ.get_or_insert_with(|| {
+                                    out.stats[jf].shadow_rays += 1;
+                                    let ray = spawn_ray_to(p, ng, eye, Vec3::ZERO);
+                                    self.mfa.occluded_window(&ray, all, |t, b1, b2| {
+                                        scene_f.accept(t, b1, b2)
+                                    })
+                                });
+                                occ >> j & 1 == 1
+                            } else {
+                                out.stats[j].shadow_rays += 1;
+                                scene_g.occluded(&spawn_ray_to(p, ng, eye, Vec3::ZERO))
+                            };
+                            if occluded {
                                 None
                             } else {
                                 let near_specular = {
@@ -1020,15 +1078,21 @@ impl Generation<'_> {
                                 let camera_moved = eye != scene_f.camera.position();
                                 let valid = cam_valid >> j & 1 == 1;
                                 let view_safe = !(near_specular && camera_moved);
-                                let reuse = valid && view_safe && !moved && !v.delta;
-                                Some((r, reuse))
+                                let split_ok = view_safe && !moved && !v.delta;
+                                let reuse = valid && split_ok;
+                                // Only the light subpath differs in g: the camera subpath
+                                // and the strategies s ≤ 1 are g's as well.
+                                let partial = !valid
+                                    && split_ok
+                                    && (cam_segments & self.lights_same) >> j & 1 == 1;
+                                Some((r, reuse, partial))
                             }
                         }
                         _ => None,
                     }
                 }
             };
-            let Some((raster_g, reuse)) = landing else {
+            let Some((raster_g, reuse, partial)) = landing else {
                 out.counts.invalid[j] += inv;
                 continue;
             };
@@ -1038,7 +1102,7 @@ impl Generation<'_> {
                 out.counts.reused[j] += 1;
                 around = self.trajectory(j, jf, None, esc_dir);
                 own
-            } else if reuse {
+            } else if reuse || partial {
                 around = self.trajectory(j, jf, x1, esc_dir);
                 let v = x1.unwrap();
                 let sv = v.surface.as_ref().unwrap();
@@ -1046,12 +1110,82 @@ impl Generation<'_> {
                 let mut l =
                     emission.map_or(Rgb::ZERO, |(_, wm)| scene_g.emitted(&sv.si, wo_g) * wm);
                 for e in &sc.entries {
-                    if e.vis >> j & 1 == 1 {
+                    if e.vis >> j & 1 == 1 && (reuse || e.s <= 1) {
                         l += sv.bsdf.f(wo_g, e.wi, TransportMode::Radiance) * e.r;
                     }
                 }
+                if partial {
+                    // s ≥ 2: f's camera subpath (reproduced in g) connected to g's light
+                    // subpath in g's scene, split at x1 like the entries.
+                    let same_view = wo_g == sv.wo;
+                    let mut sampler = ns.clone();
+                    let st = &mut out.stats[j];
+                    for t in 2..=cam.len() {
+                        for s in 2..=sc.light_g.len() {
+                            if s + t - 1 > max_segments {
+                                continue;
+                            }
+                            let Some(c) = connect(
+                                scene_g,
+                                self.bdpt,
+                                &sc.light_g,
+                                cam,
+                                s,
+                                t,
+                                &mut sampler,
+                                st,
+                            ) else {
+                                continue;
+                            };
+                            if same_view {
+                                l += c.l;
+                                continue;
+                            }
+                            let wi = if t == 2 {
+                                (sc.light_g[s - 1].p - v.p).normalize_or_zero()
+                            } else {
+                                sc.cam_rays[1].d.normalize()
+                            };
+                            let fv = sv.bsdf.f(sv.wo, wi, TransportMode::Radiance);
+                            let fg = sv.bsdf.f(wo_g, wi, TransportMode::Radiance);
+                            l += Rgb::new(
+                                if fv.x != 0.0 {
+                                    c.l.x / fv.x * fg.x
+                                } else {
+                                    0.0
+                                },
+                                if fv.y != 0.0 {
+                                    c.l.y / fv.y * fg.y
+                                } else {
+                                    0.0
+                                },
+                                if fv.z != 0.0 {
+                                    c.l.z / fv.z * fg.z
+                                } else {
+                                    0.0
+                                },
+                            );
+                        }
+                    }
+                    out.counts.partial[j] += 1;
+                }
                 out.counts.reused[j] += 1;
                 l
+            } else if x1.is_some_and(|v| {
+                self.same_camera >> j & 1 == 1
+                    && cam_segments >> j & 1 == 1
+                    && same_placement(
+                        scene_f,
+                        scene_g,
+                        v.surface.as_ref().unwrap().si.tri.geometry,
+                    )
+            }) {
+                // Same camera, x1 and every camera segment reproduced in g: f's camera
+                // subpath is the walk g makes for this raster position; only the light
+                // subpath (regenerated in g) and the connections are g's own.
+                let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
+                out.counts.retraced[j] += 1;
+                self.camera_strategies(j, light_g, cam, &ns, &mut out.stats[j])
             } else {
                 let mut c2 = cs0.clone();
                 generate_camera_subpath(
@@ -1072,10 +1206,10 @@ impl Generation<'_> {
             };
             out.counts.landed[j] += 1;
             if value.is_finite() {
-                Self::land(out, j, raster_g, value, around, reuse);
+                Self::land(out, j, raster_g, value, around, reuse || partial);
             } else {
                 inv += 1;
-                Self::land(out, j, raster_g, Rgb::ZERO, around, reuse);
+                Self::land(out, j, raster_g, Rgb::ZERO, around, reuse || partial);
             }
             out.counts.invalid[j] += inv;
         }
@@ -1184,6 +1318,7 @@ impl Stbpt {
             p.stats += stats[j];
             p.landed += counts.landed[j];
             p.reused += counts.reused[j];
+            p.partial += counts.partial[j];
             p.retraced += counts.retraced[j];
             p.invalid += counts.invalid[j];
         }
@@ -1263,6 +1398,7 @@ impl SequenceRenderer for Stbpt {
             window,
             effective_spp: p.landed as f64 / npix,
             reused: p.reused,
+            reused_partially: p.partial,
             retraced: p.retraced,
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
             light_subpaths_per_pixel: spp as f64 * window as f64,

@@ -7,3 +7,4 @@ mod common;
 mod info;
 mod render;
 mod shutter;
+mod stbpt;

@@ -45,6 +45,35 @@ pub trait RadianceEstimator: Sync {
     ) -> Rgb;
 }
 
+/// The scene(s) a driver traces a frame's pixel samples in: the frame's one scene, or
+/// the scenes of a shutter's instants (motion blur, [`crate::motion_blur`]), in which case
+/// each sample draws its instant from its own stream, the dimension right after its
+/// raster position.
+#[derive(Clone, Copy)]
+pub(crate) enum Scenes<'a> {
+    One(&'a FrameScene),
+    Shutter(&'a [FrameScene]),
+}
+
+impl<'a> Scenes<'a> {
+    /// The scene that sets the image size.
+    fn first(&self) -> &'a FrameScene {
+        match *self {
+            Scenes::One(s) => s,
+            Scenes::Shutter(v) => v.first().expect("no scene in the shutter interval"),
+        }
+    }
+
+    /// The scene of one pixel sample (draws one number for a shutter, none otherwise).
+    #[inline]
+    fn pick(&self, sampler: &mut PixelSampler) -> &'a FrameScene {
+        match *self {
+            Scenes::One(s) => s,
+            Scenes::Shutter(v) => &v[crate::motion_blur::instant_of(sampler.next_1d(), v.len())],
+        }
+    }
+}
+
 /// Tile edge in pixels. Results do not depend on it (each pixel has its own sample
 /// stream); it only sets the grain of parallel work.
 pub const TILE: u32 = 16;
@@ -81,7 +110,20 @@ pub fn render_camera_rays_tiled<E: RadianceEstimator>(
     tile: u32,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderedFrame {
-    let cam = &scene.camera;
+    camera_rays(est, Scenes::One(scene), frame, spp, seed, tile, progress)
+}
+
+/// The camera-ray driver over [`Scenes`] (one frame, or a shutter's instants).
+pub(crate) fn camera_rays<E: RadianceEstimator>(
+    est: &E,
+    scenes: Scenes,
+    frame: u32,
+    spp: u32,
+    seed: u64,
+    tile: u32,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderedFrame {
+    let cam = &scenes.first().camera;
     let (w, h) = (cam.width, cam.height);
     let tile = tile.max(1);
     let tiles_x = w.div_ceil(tile);
@@ -99,7 +141,8 @@ pub fn render_camera_rays_tiled<E: RadianceEstimator>(
                 for s in 0..spp {
                     sampler.start_sample(s);
                     let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
-                    let ray = cam.generate_ray(raster);
+                    let scene = scenes.pick(&mut sampler);
+                    let ray = scene.camera.generate_ray(raster);
                     let l = est.li(scene, &ray, &mut sampler, &mut stats);
                     stats.samples += 1;
                     if l.is_finite() {
@@ -165,7 +208,20 @@ pub fn render_with_splats<E: SplattingEstimator>(
     seed: u64,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderedFrame {
-    let cam = &scene.camera;
+    splatting(est, Scenes::One(scene), frame, spp, seed, progress)
+}
+
+/// The splatting driver over [`Scenes`] (one frame, or a shutter's instants: each pixel's
+/// sample runs, and splats, in its own instant's scene).
+pub(crate) fn splatting<E: SplattingEstimator>(
+    est: &E,
+    scenes: Scenes,
+    frame: u32,
+    spp: u32,
+    seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderedFrame {
+    let cam = &scenes.first().camera;
     let (w, h) = (cam.width, cam.height);
     let tiles_x = w.div_ceil(TILE);
     let tiles_y = h.div_ceil(TILE);
@@ -187,6 +243,7 @@ pub fn render_with_splats<E: SplattingEstimator>(
                     let mut sampler = PixelSampler::new(seed, frame, px, py);
                     sampler.start_sample(s);
                     let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
+                    let scene = scenes.pick(&mut sampler);
                     let l = est.sample(scene, raster, &mut sampler, &mut stats, &mut splats);
                     stats.samples += 1;
                     own.push(if l.is_finite() {

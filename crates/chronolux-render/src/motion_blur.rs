@@ -28,18 +28,13 @@
 
 use crate::bdpt::Bdpt;
 use crate::integrator::{
-    Integrator, RadianceEstimator, RenderedFrame, SplattingEstimator, TILE, tile_rect,
+    Integrator, RadianceEstimator, RenderedFrame, Scenes, SplattingEstimator, TILE, camera_rays,
+    splatting,
 };
 use crate::pt::PathTracer;
 use crate::sequence::SequenceRenderer;
-use chronolux_core::color::Rgb;
-use chronolux_core::film::Film;
-use chronolux_core::math::Vec2;
-use chronolux_core::parallel;
-use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
-use chronolux_core::stats::Stats;
 
 /// Largest number of instants a shutter interval is discretised into.
 pub const MAX_INSTANTS: u32 = 16;
@@ -183,55 +178,15 @@ pub fn render_time_sampled<E: RadianceEstimator>(
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderedFrame {
     assert!(!scenes.is_empty(), "no scene in the shutter interval");
-    let cam0 = &scenes[0].camera;
-    let (w, h) = (cam0.width, cam0.height);
-    let tiles_x = w.div_ceil(TILE);
-    let n_tiles = (tiles_x * h.div_ceil(TILE)) as usize;
-    let n = scenes.len();
-    let results = parallel::map_chunks(n_tiles, 1, |range| {
-        let (x0, y0, tw, th) = tile_rect(range.start as u32, tiles_x, TILE, w, h);
-        let mut film = Film::new(tw, th);
-        let mut stats = Stats::default();
-        let mut invalid = 0u64;
-        for y in 0..th {
-            for x in 0..tw {
-                let (px, py) = (x0 + x, y0 + y);
-                let mut sampler = PixelSampler::new(seed, frame, px, py);
-                for s in 0..spp {
-                    sampler.start_sample(s);
-                    let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
-                    let scene = &scenes[instant_of(sampler.next_1d(), n)];
-                    let ray = scene.camera.generate_ray(raster);
-                    let l = est.li(scene, &ray, &mut sampler, &mut stats);
-                    stats.samples += 1;
-                    if l.is_finite() {
-                        film.add(x, y, l, 1.0);
-                    } else {
-                        invalid += 1;
-                        film.add(x, y, Rgb::ZERO, 1.0);
-                    }
-                }
-            }
-        }
-        progress((tw * th) as u64);
-        (x0, y0, film, stats, invalid)
-    });
-    let mut film = Film::new(w, h);
-    let mut stats = Stats::default();
-    let mut invalid = 0;
-    for (x0, y0, tile, s, inv) in &results {
-        film.merge_tile(tile, *x0, *y0);
-        stats += *s;
-        invalid += inv;
-    }
-    RenderedFrame {
-        width: w,
-        height: h,
-        pixels: film.pixels(),
-        variance: film.variance_of_mean(),
-        stats,
-        invalid_samples: invalid,
-    }
+    camera_rays(
+        est,
+        Scenes::Shutter(scenes),
+        frame,
+        spp,
+        seed,
+        TILE,
+        progress,
+    )
 }
 
 /// [`render_with_splats`](crate::integrator::render_with_splats) over a shutter: in pass
@@ -251,76 +206,5 @@ pub fn render_with_splats_time_sampled<E: SplattingEstimator>(
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderedFrame {
     assert!(!scenes.is_empty(), "no scene in the shutter interval");
-    let cam0 = &scenes[0].camera;
-    let (w, h) = (cam0.width, cam0.height);
-    let tiles_x = w.div_ceil(TILE);
-    let n_tiles = (tiles_x * h.div_ceil(TILE)) as usize;
-    let n = scenes.len();
-    let mut film = Film::new(w, h);
-    let mut stats = Stats::default();
-    let mut invalid = 0u64;
-    let mut pass = vec![Rgb::ZERO; (w * h) as usize];
-    for s in 0..spp {
-        let results = parallel::map_chunks(n_tiles, 1, |range| {
-            let (x0, y0, tw, th) = tile_rect(range.start as u32, tiles_x, TILE, w, h);
-            let mut own = Vec::with_capacity((tw * th) as usize);
-            let mut splats = Vec::new();
-            let mut stats = Stats::default();
-            let mut invalid = 0u64;
-            for y in 0..th {
-                for x in 0..tw {
-                    let (px, py) = (x0 + x, y0 + y);
-                    let mut sampler = PixelSampler::new(seed, frame, px, py);
-                    sampler.start_sample(s);
-                    let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
-                    let scene = &scenes[instant_of(sampler.next_1d(), n)];
-                    let l = est.sample(scene, raster, &mut sampler, &mut stats, &mut splats);
-                    stats.samples += 1;
-                    own.push(if l.is_finite() {
-                        l
-                    } else {
-                        invalid += 1;
-                        Rgb::ZERO
-                    });
-                }
-            }
-            let np = (tw * th) as u64;
-            progress(np * (s as u64 + 1) / spp as u64 - np * s as u64 / spp as u64);
-            (x0, y0, tw, th, own, splats, stats, invalid)
-        });
-        for (x0, y0, tw, th, own, _, st, inv) in &results {
-            for y in 0..*th {
-                for x in 0..*tw {
-                    pass[((y0 + y) * w + x0 + x) as usize] = own[(y * tw + x) as usize];
-                }
-            }
-            stats += *st;
-            invalid += inv;
-        }
-        for (.., splats, _, _) in &results {
-            for (r, v) in splats {
-                if !v.is_finite() {
-                    invalid += 1;
-                    continue;
-                }
-                let (x, y) = (r.x as u32, r.y as u32);
-                if r.x >= 0.0 && r.y >= 0.0 && x < w && y < h {
-                    pass[(y * w + x) as usize] += *v;
-                }
-            }
-        }
-        for y in 0..h {
-            for x in 0..w {
-                film.add(x, y, pass[(y * w + x) as usize], 1.0);
-            }
-        }
-    }
-    RenderedFrame {
-        width: w,
-        height: h,
-        pixels: film.pixels(),
-        variance: film.variance_of_mean(),
-        stats,
-        invalid_samples: invalid,
-    }
+    splatting(est, Scenes::Shutter(scenes), frame, spp, seed, progress)
 }

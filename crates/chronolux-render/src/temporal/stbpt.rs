@@ -140,7 +140,7 @@ use crate::bdpt::{
     BdptSettings, Vertex, VertexKind, connect, connect_with, generate_camera_subpath,
     generate_camera_subpath_with, generate_light_subpath, generate_light_subpath_with, mis_weight,
 };
-use crate::integrator::{RenderedFrame, TILE};
+use crate::integrator::{RenderedFrame, TILE, tile_rect};
 use crate::sequence::{ReuseStats, SequenceRenderer};
 use crate::temporal::blur::{TrajectoryVertex, splat_trajectory};
 use crate::temporal::window_film::{Contribution, FilmStats, WindowFilm};
@@ -603,37 +603,30 @@ impl Generation<'_> {
                 break;
             }
             let mut vis: FrameMask = 1 << j;
-            let c = if record.is_some() {
-                connect_with(
-                    scene,
-                    self.bdpt,
-                    light,
-                    camera,
-                    s,
-                    1,
-                    &mut sampler,
-                    &mut out.stats[j],
-                    &mut |r| {
+            // Recording: the shadow ray answered for the whole window; otherwise for j.
+            let windowed = record.is_some();
+            let c = connect_with(
+                scene,
+                self.bdpt,
+                light,
+                camera,
+                s,
+                1,
+                &mut sampler,
+                &mut out.stats[j],
+                &mut |r| {
+                    if windowed {
                         vis = all
                             & !self
                                 .mfa
                                 .occluded_window(r, all, |a, b1, b2| scene.accept(a, b1, b2));
                         vis != 0
-                    },
-                )
-                .map(|c| c.contribution)
-            } else {
-                connect(
-                    scene,
-                    self.bdpt,
-                    light,
-                    camera,
-                    s,
-                    1,
-                    &mut sampler,
-                    &mut out.stats[j],
-                )
-            };
+                    } else {
+                        !scene.occluded(r)
+                    }
+                },
+            )
+            .map(|c| c.contribution);
             let Some(c) = c else { continue };
             let Some(r) = c.raster else { continue };
             if !c.l.is_finite() {
@@ -1279,8 +1272,7 @@ impl Stbpt {
             let batch_tiles = TILES_PER_BATCH.min(n_tiles - first);
             let results = parallel::map_chunks(batch_tiles, 1, |range| {
                 let t = (first + range.start) as u32;
-                let (x0, y0) = ((t % tiles_x) * TILE, (t / tiles_x) * TILE);
-                let (tw, th) = (TILE.min(w - x0), TILE.min(h - y0));
+                let (x0, y0, tw, th) = tile_rect(t, tiles_x, TILE, w, h);
                 let mut out = TileOut {
                     batch: Vec::new(),
                     squares: Vec::new(),

@@ -243,16 +243,7 @@ impl WindowFilm {
 
     /// Pixel rectangle (x0, y0, w, h) of tile `t`.
     fn tile_rect(&self, t: u32) -> (u32, u32, u32, u32) {
-        let (x0, y0) = (
-            (t % self.tiles_x) * FILM_TILE,
-            (t / self.tiles_x) * FILM_TILE,
-        );
-        (
-            x0,
-            y0,
-            FILM_TILE.min(self.width - x0),
-            FILM_TILE.min(self.height - y0),
-        )
+        crate::integrator::tile_rect(t, self.tiles_x, FILM_TILE, self.width, self.height)
     }
 
     fn tile_pixels(&self, t: u32) -> usize {

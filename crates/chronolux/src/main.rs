@@ -3,6 +3,7 @@
 mod bench;
 mod cli;
 mod compare;
+mod config;
 mod info;
 mod quality;
 mod reference;

@@ -4,6 +4,7 @@
 
 mod bad_input;
 mod common;
+mod config;
 mod info;
 mod render;
 mod shutter;

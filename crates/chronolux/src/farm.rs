@@ -562,7 +562,7 @@ pub fn assemble(a: AssembleArgs) -> Result<()> {
     }
     let mut images: std::collections::BTreeMap<u32, Vec<Rgb>> = Default::default();
     for &f in &c.frames {
-        let img = chronolux_io::image::read_exr(&sink.exr_path(f))
+        let img = chronolux_io::image::read_exr(sink.exr_path(f))
             .with_context(|| format!("frame {f} does not decode"))?;
         if [img.width, img.height] != c.resolution {
             bail!(

@@ -379,7 +379,9 @@ fn write_plan(render: &RenderArgs, cut_args: &CutArgs) -> Result<(Plan, PathBuf)
     Ok((plan, dir))
 }
 
-/// `chronolux farm slurm|openjd`.
+/// `chronolux farm slurm|openjd`. The OpenJD template's paths default to the template's
+/// own folder (the farm folder, where `plan.json` is), as the specification requires of
+/// default paths; the executable is a string parameter for the workers.
 pub fn farm(args: FarmArgs) -> Result<()> {
     match args.kind {
         FarmKind::Slurm(a) => slurm(a),
@@ -471,16 +473,15 @@ fn openjd(a: OpenjdArgs) -> Result<()> {
     let (plan, dir) = write_plan(&a.render, &a.cut)?;
     let n = plan.segments.len();
     let exe = exe()?;
-    let d = dir.display().to_string();
     // YAML strings quoted with single quotes (a quote inside is doubled).
     let q = |s: &str| format!("'{}'", s.replace('\'', "''"));
     let template = format!(
         "specificationVersion: 'jobtemplate-2023-09'\n\
          name: 'chronolux {method}, {frames} frames in {n} segments'\n\
          parameterDefinitions:\n\
-         - name: Chronolux\n  type: PATH\n  objectType: FILE\n  dataFlow: IN\n  default: {exe}\n\
-         - name: PlanFile\n  type: PATH\n  objectType: FILE\n  dataFlow: IN\n  default: {plan}\n\
-         - name: OutputDir\n  type: PATH\n  objectType: DIRECTORY\n  dataFlow: OUT\n  default: {dir}\n\
+         - name: Chronolux\n  type: STRING\n  description: 'chronolux executable on the workers'\n  default: {exe}\n\
+         - name: PlanFile\n  type: PATH\n  objectType: FILE\n  dataFlow: IN\n  default: 'plan.json'\n\
+         - name: OutputDir\n  type: PATH\n  objectType: DIRECTORY\n  dataFlow: OUT\n  default: '.'\n\
          steps:\n\
          - name: Render\n\
          \x20 parameterSpace:\n\
@@ -504,8 +505,6 @@ fn openjd(a: OpenjdArgs) -> Result<()> {
         method = plan.config.method,
         frames = plan.config.frames.len(),
         exe = q(&exe),
-        plan = q(&format!("{d}/plan.json")),
-        dir = q(&d),
         last = n - 1,
     );
     let p = dir.join("job.template.yaml");

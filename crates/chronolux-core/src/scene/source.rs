@@ -8,6 +8,7 @@
 //! for, and keeps the last few built frames (least recently used first out), so a window
 //! sliding by one frame builds one new scene, not 2K + 1.
 
+use super::delta::FrameDelta;
 use super::frame::{BuildStats, FrameBuilder, FrameScene};
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -99,6 +100,24 @@ impl FrameSource {
         self.last_build = self.builder.last_build;
         self.builds += 1;
         s
+    }
+
+    /// What changes anywhere in the segment of `frames` (increasing): [`FrameDelta::over`]
+    /// their scenes, built through the cache two at a time (a segment longer than the
+    /// cache capacity is not held in memory at once).
+    pub fn delta_over(&mut self, frames: &[u32]) -> FrameDelta {
+        let mut delta = FrameDelta::default();
+        let mut prev: Option<Arc<FrameScene>> = None;
+        for &f in frames {
+            let s = self.frame(f);
+            let d = match &prev {
+                Some(p) => FrameDelta::between(p, &s),
+                None => FrameDelta::between(&s, &s),
+            };
+            delta.merge(&d);
+            prev = Some(s);
+        }
+        delta
     }
 
     /// The builder (scene description, geometry count).

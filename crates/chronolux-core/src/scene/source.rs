@@ -13,6 +13,13 @@ use super::frame::{BuildStats, FrameBuilder, FrameScene};
 use std::collections::VecDeque;
 use std::sync::Arc;
 
+/// Time (s) at which frame `frame` is shown at `fps` frames per second: `frame / fps`.
+/// The one frame-to-time mapping ([`FrameSource::time`] uses it; so should everything that
+/// needs a frame's time without a source).
+pub fn frame_time(frame: u32, fps: f32) -> f32 {
+    frame as f32 / fps
+}
+
 /// Scenes of the frames of one animation clip at one frame rate.
 pub struct FrameSource {
     builder: FrameBuilder,
@@ -50,9 +57,9 @@ impl FrameSource {
         self.fps
     }
 
-    /// Time (s) of frame `f`.
+    /// Time (s) of frame `f` ([`frame_time`]).
     pub fn time(&self, f: u32) -> f32 {
-        f as f32 / self.fps
+        frame_time(f, self.fps)
     }
 
     /// The frames to be rendered, increasing.

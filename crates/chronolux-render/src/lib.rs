@@ -26,6 +26,7 @@
 //! - `stbpt`: spatio-temporal BDPT (Havran et al. 2003), each bidirectional sample reused
 //!   in the frames of a window around its own — [`temporal::stbpt`].
 
+pub mod aov;
 pub mod bdpt;
 pub mod dept;
 pub mod integrator;

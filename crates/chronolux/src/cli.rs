@@ -146,6 +146,18 @@ pub struct RenderArgs {
     /// Do not write the animated preview.
     #[arg(long)]
     pub no_preview: bool,
+    /// Render passes written as layers of each frame's EXR (Blender's multilayer names):
+    /// `albedo` (ViewLayer.Denoising Albedo), `normal` (ViewLayer.Denoising Normal, world
+    /// space), `depth` (ViewLayer.Depth, distance along the camera ray), `motion`
+    /// (ViewLayer.Vector: X,Y towards the previous frame, Z,W towards the next, in pixels,
+    /// +y down); presets `denoise` (albedo, normal) and `all`. The same for every method.
+    #[arg(long, value_name = "LIST")]
+    pub passes: Option<String>,
+    /// Denoise each frame with Intel Open Image Denoise (albedo and normal passes as
+    /// guides); the EXR's main image is the denoised one and the noisy one is kept as the
+    /// layer ViewLayer.Noisy Image. Needs a build with `--features oidn` (README).
+    #[arg(long)]
+    pub denoise: bool,
     /// Render one segment of a farm plan (`chronolux plan`, `chronolux farm`): the plan
     /// fixes every setting, so only --segment, --output, --threads, --resume and
     /// --no-preview may be given with it.

@@ -314,6 +314,8 @@ pub fn render_segment(args: RenderArgs) -> Result<()> {
         ("--photons", args.photons.is_some()),
         ("--seed", args.seed.is_some()),
         ("--exposure", args.exposure.is_some()),
+        ("--passes", args.passes.is_some()),
+        ("--denoise", args.denoise),
     ]
     .into_iter()
     .filter(|(_, g)| *g)

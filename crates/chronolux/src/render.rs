@@ -10,6 +10,7 @@ use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
 use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::Image;
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
+use chronolux_render::aov::PassSet;
 use chronolux_render::registry::{self, BuildContext};
 use chronolux_render::run;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -182,6 +183,14 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
     flag("--max-depth", "max_depth", args.max_depth.map(Into::into));
     flag("--window", "window", args.window.map(Into::into));
     let sets = parse_sets(&args.set)?;
+    let passes = match &args.passes {
+        Some(p) => PassSet::parse(p).map_err(anyhow::Error::msg)?,
+        None => prev.passes.unwrap_or_default(),
+    };
+    let denoise = args.denoise || prev.denoise.unwrap_or(false);
+    if denoise && let Some(why) = crate::denoise::unavailable() {
+        bail!("{why}");
+    }
     let settings = technique_settings(tech, base.as_ref(), &flags, args.photons.as_deref(), &sets)?;
     // Built once here so that a bad combination fails before the scene is loaded.
     tech.build(&settings, &BuildContext { shutter })
@@ -255,6 +264,8 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         frames: frames.clone(),
         shutter,
         exposure,
+        passes,
+        denoise,
     };
     Ok((config, input))
 }
@@ -305,6 +316,24 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         manifest.merge_earlier(&earlier);
     }
 
+    // A denoised frame needs its albedo and normal.
+    let passes = if config.denoise {
+        config
+            .passes
+            .with(PassSet::parse("denoise").expect("preset"))
+    } else {
+        config.passes
+    };
+    let options = run::RunOptions {
+        passes,
+        seed: registry::find_key(&config.technique, "seed")
+            .and_then(|k| {
+                k.split('.')
+                    .try_fold(&config.technique, |v, p| v.get(p))
+                    .and_then(|v| v.as_u64())
+            })
+            .unwrap_or(0),
+    };
     let progress = Progress::new(w, h, frames.len());
     progress.say(format!(
         "rendering {} frame(s) of {} at {w}x{h}, method {}, {} thread(s) into {}",
@@ -319,6 +348,8 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         manifest,
         exposure: config.exposure,
         resume: exec.resume,
+        denoise: config.denoise,
+        keep_passes: config.passes,
         owned: exec.segment.as_ref().map(|s| s.owned.clone()),
         warm_up_until: exec
             .segment
@@ -326,12 +357,13 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
             .and_then(|s| s.warm_up_until(&sink, exec.resume)),
     };
     let mut progress = progress;
-    let result = chronolux_render::run::run(
+    let result = chronolux_render::run::run_with(
         renderer.as_mut(),
         &mut source,
         &frames,
         &mut [&mut disk, &mut progress],
         None,
+        options,
     );
     // The bars are cleared whatever happens, so that an error line is not drawn over.
     progress.clear();
@@ -377,6 +409,11 @@ pub struct DiskSink<'a> {
     /// A stateful technique's segment renders (without writing) every frame before this
     /// one: its history.
     pub warm_up_until: Option<u32>,
+    /// Denoise the beauty (the noisy one becomes a layer).
+    pub denoise: bool,
+    /// The passes the user asked for (a denoised render computes albedo and normal even
+    /// when they were not asked for, and does not write them then).
+    pub keep_passes: PassSet,
 }
 
 impl run::FrameSink for DiskSink<'_> {
@@ -393,14 +430,42 @@ impl run::FrameSink for DiskSink<'_> {
             return Ok(()); // a warm-up frame: computed for its history only
         }
         let out = f.output;
-        let image = Image {
+        let mut image = Image {
             width: out.width,
             height: out.height,
             pixels: out.pixels.clone(),
         };
-        self.sink
-            .write_frame(f.frame, &image, self.exposure)
-            .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+        match f.aovs {
+            None => self
+                .sink
+                .write_frame(f.frame, &image, self.exposure)
+                .map_err(|e| format!("writing frame {}: {e}", f.frame))?,
+            Some(aovs) => {
+                let mut kept = aovs.clone();
+                if !self.keep_passes.albedo {
+                    kept.albedo.clear();
+                }
+                if !self.keep_passes.normal {
+                    kept.normal.clear();
+                }
+                let mut layers = crate::denoise::pass_channels(&kept);
+                if self.denoise {
+                    let clean = crate::denoise::denoise(&image.pixels, aovs)
+                        .map_err(|e| format!("frame {}: {e}", f.frame))?;
+                    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                        layers.push((
+                            format!("ViewLayer.Noisy Image.{name}"),
+                            image.pixels.iter().map(|p| p[c]).collect(),
+                        ));
+                    }
+                    image.pixels = clean;
+                }
+                chronolux_io::image::write_exr_layers(self.sink.exr_path(f.frame), &image, &layers)
+                    .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+                chronolux_io::image::write_png(self.sink.png_path(f.frame), &image, self.exposure)
+                    .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+            }
+        }
         self.manifest
             .upsert_frame(FrameRecord::new(f.frame, f.time_s, f.wall_s, f.record()));
         self.sink.write_manifest(&self.manifest)?;
@@ -534,6 +599,8 @@ fn check_resumable(
         "fps",
         "shutter",
         "exposure",
+        "passes",
+        "denoise",
         "animation",
         "camera",
         "stage",

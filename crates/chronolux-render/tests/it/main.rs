@@ -1,6 +1,7 @@
 //! The one integration-test binary of chronolux-render: integrators on scenes with
 //! derivable answers.
 
+mod aov;
 mod bdpt;
 mod blur;
 mod delta;

@@ -208,3 +208,32 @@ pub fn render_with_splats_time_sampled<E: SplattingEstimator>(
     assert!(!scenes.is_empty(), "no scene in the shutter interval");
     splatting(est, Scenes::Shutter(scenes), frame, spp, seed, progress)
 }
+
+/// What the frame-by-frame camera-sample techniques (`path`, `bdpt`) can do: motion blur
+/// by time sampling, effort in samples per pixel.
+pub const FRAME_BY_FRAME_SPP: crate::registry::Capabilities = crate::registry::Capabilities {
+    motion_blur: true,
+    photons: false,
+    window: false,
+    stateless: true,
+    effort: crate::registry::Effort {
+        key: "spp",
+        per_unit: 1,
+        unit: "samples per pixel",
+    },
+};
+
+/// A frame-by-frame technique of `integrator`, time-sampled over the shutter when it is
+/// open ([`MotionBlur`]), else plain ([`crate::sequence::FrameByFrame`], which also renders
+/// progressive passes).
+pub fn frame_by_frame<I: ShutterIntegrator + 'static>(
+    integrator: I,
+    shutter: f32,
+    name: &'static str,
+) -> crate::registry::Renderer {
+    if shutter > 0.0 {
+        Box::new(MotionBlur::new(integrator, shutter))
+    } else {
+        Box::new(crate::sequence::FrameByFrame { integrator, name })
+    }
+}

@@ -19,7 +19,7 @@ pub fn unavailable() -> Option<&'static str> {
 }
 
 fn flat3(v: impl Iterator<Item = [f32; 3]>) -> Vec<f32> {
-    v.flat_map(|p| p).collect()
+    v.flatten().collect()
 }
 
 /// The beauty `pixels` denoised with the albedo and normal passes of `aovs`.

@@ -1,7 +1,7 @@
 //! # chronolux-render
 //!
 //! Light transport. Single-frame integrators implement [`integrator::Integrator`]; the
-//! per-path logic of each estimator lives in one kernel ([`pt::PathTracer::li`] for path
+//! per-path logic of each estimator lives in one kernel ([`RadianceEstimator::li`](integrator::RadianceEstimator::li) of [`pt::PathTracer`] for path
 //! tracing) that temporal techniques will call as their baselines do. Frame sequences go
 //! through [`sequence`], the one loop that builds frames and times them, so baselines and
 //! temporal techniques differ only in light-transport reuse.

@@ -19,7 +19,13 @@ pub struct RenderedFrame {
     pub stats: Stats,
     /// Samples dropped because their value was NaN or infinite (should be 0).
     pub invalid_samples: u64,
+    /// The technique's own report of this frame (photons shot, reuse statistics, …),
+    /// merged into the frame's record in `run.json`. Empty for plain integrators.
+    pub report: Report,
 }
+
+/// A technique's per-frame report: named JSON values (`"photons"`, `"reuse"`, …).
+pub type Report = serde_json::Map<String, serde_json::Value>;
 
 /// Renders one frame of a [`FrameScene`].
 pub trait Integrator: Sync {
@@ -31,6 +37,15 @@ pub trait Integrator: Sync {
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame;
+
+    /// The same integrator for one pass of a progressive rendering
+    /// ([`crate::sequence::FrameByFrame`]'s passes): `spp` samples per pixel drawn from the
+    /// streams of [`crate::sequence::batch_seed`]`(its seed, round, half)`, an independent
+    /// randomisation. `None`: it cannot be re-batched.
+    fn batch(&self, spp: u32, round: u32, half: u32) -> Option<Box<dyn Integrator + Send>> {
+        let _ = (spp, round, half);
+        None
+    }
 }
 
 /// An estimator of radiance along one camera ray.
@@ -172,6 +187,7 @@ pub(crate) fn camera_rays<E: RadianceEstimator>(
         variance: film.variance_of_mean(),
         stats,
         invalid_samples: invalid,
+        report: Report::new(),
     }
 }
 
@@ -293,5 +309,6 @@ pub(crate) fn splatting<E: SplattingEstimator>(
         variance: film.variance_of_mean(),
         stats,
         invalid_samples: invalid,
+        report: Report::new(),
     }
 }

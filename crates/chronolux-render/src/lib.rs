@@ -1,12 +1,16 @@
 //! # chronolux-render
 //!
 //! Light transport. Single-frame integrators implement [`integrator::Integrator`]; the
-//! per-path logic of each estimator lives in one kernel ([`RadianceEstimator::li`](integrator::RadianceEstimator::li) of [`pt::PathTracer`] for path
-//! tracing) that temporal techniques will call as their baselines do. Frame sequences go
-//! through [`sequence`], the one loop that builds frames and times them, so baselines and
+//! per-path logic of each estimator lives in one kernel
+//! ([`RadianceEstimator::li`](integrator::RadianceEstimator::li) of [`pt::PathTracer`] for
+//! path tracing) that temporal techniques call as their baselines do. Every technique is a
+//! [`sequence::SequenceRenderer`] named once, in [`registry`] (name, summary, settings,
+//! capabilities, constructor); frame sequences go through [`run`], the one run loop that
+//! times frames and hands them to sinks (files, memory, progress), so baselines and
 //! temporal techniques differ only in light-transport reuse.
 //!
-//! Techniques (more follow the MPI temporal-coherence work, see the repository README):
+//! Techniques (the registry's list; more follow the MPI temporal-coherence work, see the
+//! repository README):
 //! - `path`: unidirectional path tracing with next-event estimation, MIS (power
 //!   heuristic), Russian roulette and Owen-scrambled Sobol samples per pixel — the
 //!   reference every other method is measured against.
@@ -20,6 +24,8 @@
 //! - `spacetime-dept`: the same photons pooled over a per-element temporal window cut by
 //!   an energy test, completed by a spatial bilateral filter (Weber et al. 2004) —
 //!   [`temporal::spacetime_dept`].
+//! - `stbpt`: spatio-temporal BDPT (Havran et al. 2003), each bidirectional sample reused
+//!   in the frames of a window around its own — [`temporal::stbpt`].
 
 pub mod bdpt;
 pub mod dept;
@@ -28,5 +34,6 @@ pub mod kernels;
 pub mod motion_blur;
 pub mod pt;
 pub mod registry;
+pub mod run;
 pub mod sequence;
 pub mod temporal;

@@ -15,7 +15,7 @@ use chronolux_core::stats::Stats;
 
 /// Path tracer settings.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct PathSettings {
     /// Samples per pixel. Default 64.
     pub spp: u32,
@@ -184,4 +184,44 @@ impl Integrator for PathTracer {
             progress,
         )
     }
+
+    fn batch(&self, spp: u32, round: u32, half: u32) -> Option<Box<dyn Integrator + Send>> {
+        Some(Box::new(PathTracer::new(PathSettings {
+            spp,
+            seed: crate::sequence::batch_seed(self.settings.seed, round, half),
+            ..self.settings.clone()
+        })))
+    }
 }
+
+/// Registry entry of `path`; with a shutter, time-sampled motion blur
+/// ([`crate::motion_blur::MotionBlur`]).
+pub static TECHNIQUE: crate::registry::Preset<PathSettings> = crate::registry::Preset {
+    name: "path",
+    summary: "unidirectional path tracing with NEE and MIS, frame by frame (the reference)",
+    capabilities: crate::registry::Capabilities {
+        motion_blur: true,
+        photons: false,
+        window: false,
+        stateless: true,
+        effort: crate::registry::Effort {
+            key: "spp",
+            per_unit: 1,
+            unit: "samples per pixel",
+        },
+    },
+    defaults: PathSettings::default,
+    build: |s, ctx, name| {
+        if ctx.shutter > 0.0 {
+            Box::new(crate::motion_blur::MotionBlur::new(
+                PathTracer::new(s),
+                ctx.shutter,
+            ))
+        } else {
+            Box::new(crate::sequence::FrameByFrame {
+                integrator: PathTracer::new(s),
+                name,
+            })
+        }
+    },
+};

@@ -1,77 +1,430 @@
-//! The one place where technique names map to types.
+//! The one place a technique is named.
+//!
+//! Each technique is one module plus one entry in [`TECHNIQUES`]: a [`Preset`] (usually a
+//! `pub static` in the technique's own module) carrying its name, a one-line summary, its
+//! settings type with their defaults, its [`Capabilities`] and how it is built (motion-blur
+//! wrapping included). The command line's `--method` values, its flag checks, `bench
+//! quality`'s effort scaling and the `--help` method list all come from here, so adding a
+//! technique touches no file of the command line. As in pbrt-v4, where each integrator
+//! parses its own parameters, the driver knows no names: settings travel as JSON
+//! ([`resolve`]) and are checked by the technique's own serde type, so an unknown key or a
+//! bad value is an error that names the valid keys.
+//!
+//! Presets such as `dept-spatial` are named default settings of one technique (`dept` with
+//! its Gaussian filter), not separate types: `--method dept --set filter=...` and
+//! `--method dept-spatial` reach the same code.
 
-use crate::bdpt::{Bdpt, BdptSettings};
-use crate::dept::{Dept, DeptSequence, DeptSettings};
-use crate::pt::{PathSettings, PathTracer};
-use crate::sequence::{FrameByFrame, SequenceRenderer};
-use crate::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
-use crate::temporal::stbpt::{Stbpt, StbptSettings};
+use crate::sequence::SequenceRenderer;
+use serde::Serialize;
+use serde::de::DeserializeOwned;
+use serde_json::{Map, Value};
 
-/// Techniques selectable with `--method`.
-pub const METHODS: &[(&str, &str)] = &[
-    (
-        "path",
-        "unidirectional path tracing with NEE and MIS (the reference)",
-    ),
-    (
-        "bdpt",
-        "bidirectional path tracing, all strategies with MIS, frame by frame",
-    ),
-    (
-        "dept",
-        "photon density estimation on mesh elements, frame by frame, no filtering",
-    ),
-    (
-        "dept-spatial",
-        "photon density estimation on mesh elements, spatial Gaussian filter",
-    ),
-    (
-        "dept-bilateral",
-        "photon density estimation on mesh elements, spatial bilateral filter",
-    ),
-    (
-        "stbpt",
-        "spatio-temporal BDPT: each sample reused in the frames of a window [f-K, f+K]",
-    ),
-    (
-        "spacetime-dept",
-        "photon density estimation on mesh elements, space-time window + bilateral filter",
-    ),
-];
+/// A built technique, ready to render a sequence.
+pub type Renderer = Box<dyn SequenceRenderer + Send>;
 
-/// A technique and its settings.
-#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-#[serde(tag = "method", rename_all = "kebab-case", deny_unknown_fields)]
-pub enum TechniqueConfig {
-    Path(PathSettings),
-    Bdpt(BdptSettings),
-    Dept(DeptSettings),
-    DeptSpatial(DeptSettings),
-    DeptBilateral(DeptSettings),
-    SpacetimeDept(SpacetimeSettings),
-    Stbpt(StbptSettings),
+/// What the effort of a technique is, for `bench quality`, which doubles it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Effort {
+    /// The settings key set to `effort × per_unit` (found as [`set_key`] finds keys).
+    pub key: &'static str,
+    /// Units of `key` per effort level (1 sample per pixel; 1000 photons).
+    pub per_unit: u64,
+    /// What one effort unit is, for reports.
+    pub unit: &'static str,
 }
 
-impl TechniqueConfig {
-    pub fn build(&self) -> Box<dyn SequenceRenderer + Send> {
-        match self {
-            TechniqueConfig::Path(s) => Box::new(FrameByFrame {
-                integrator: PathTracer::new(s.clone()),
-                name: "path",
-            }),
-            TechniqueConfig::Bdpt(s) => Box::new(FrameByFrame {
-                integrator: Bdpt::new(s.clone()),
-                name: "bdpt",
-            }),
-            TechniqueConfig::Dept(s) => Box::new(DeptSequence::new(Dept::new(s.clone()), "dept")),
-            TechniqueConfig::DeptSpatial(s) => {
-                Box::new(DeptSequence::new(Dept::new(s.clone()), "dept-spatial"))
-            }
-            TechniqueConfig::DeptBilateral(s) => {
-                Box::new(DeptSequence::new(Dept::new(s.clone()), "dept-bilateral"))
-            }
-            TechniqueConfig::SpacetimeDept(s) => Box::new(SpacetimeDept::new(s.clone())),
-            TechniqueConfig::Stbpt(s) => Box::new(Stbpt::new(s.clone())),
+/// What a technique can do, for the command line's checks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub struct Capabilities {
+    /// `--shutter` (motion blur) is supported.
+    pub motion_blur: bool,
+    /// It shoots photons (`--photons N|auto` applies).
+    pub photons: bool,
+    /// It reuses work over a window of neighbouring frames (`--window K`).
+    pub window: bool,
+    /// Its frames depend only on (seed, frame, pixel, sample index), not on other frames
+    /// rendered before them (frame-by-frame baselines).
+    pub stateless: bool,
+    /// The knob `bench quality` doubles.
+    pub effort: Effort,
+}
+
+/// Everything a technique is built from besides its own settings: what belongs to the
+/// run (the camera's shutter), not to the light transport.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BuildContext {
+    /// Fraction of the frame interval the shutter is open (0 = no motion blur).
+    pub shutter: f32,
+}
+
+/// A technique as the registry sees it (object-safe; implemented by [`Preset`]).
+pub trait Technique: Sync {
+    fn name(&self) -> &'static str;
+    fn summary(&self) -> &'static str;
+    fn capabilities(&self) -> Capabilities;
+    /// The default settings, every field present.
+    fn defaults(&self) -> Value;
+    /// Checks `settings` against the settings type and returns them completed and
+    /// normalised (every field present, in the type's own form).
+    fn check(&self, settings: &Value) -> Result<Value, String>;
+    /// Builds the technique from settings (as [`Technique::check`] accepts).
+    fn build(&self, settings: &Value, ctx: &BuildContext) -> Result<Renderer, String>;
+}
+
+/// A registry entry: a settings type `S` with named defaults and a constructor.
+pub struct Preset<S> {
+    pub name: &'static str,
+    pub summary: &'static str,
+    pub capabilities: Capabilities,
+    pub defaults: fn() -> S,
+    /// Builds the technique; the name is the preset's (for reports).
+    pub build: fn(S, &BuildContext, &'static str) -> Renderer,
+}
+
+impl<S> Preset<S>
+where
+    S: Serialize + DeserializeOwned,
+{
+    fn parse(&self, settings: &Value) -> Result<S, String> {
+        // Completed from the defaults first, so a partial object (a `--config` file that
+        // sets two keys) means "these two, the rest as default".
+        let mut full = full_defaults(self);
+        merge(&mut full, settings);
+        serde_json::from_value(full).map_err(|e| {
+            format!(
+                "settings of --method {}: {e} (valid keys: {})",
+                self.name,
+                keys(&full_defaults(self)).join(", ")
+            )
+        })
+    }
+}
+
+impl<S> Technique for Preset<S>
+where
+    S: Serialize + DeserializeOwned + Sync,
+{
+    fn name(&self) -> &'static str {
+        self.name
+    }
+    fn summary(&self) -> &'static str {
+        self.summary
+    }
+    fn capabilities(&self) -> Capabilities {
+        self.capabilities
+    }
+    fn defaults(&self) -> Value {
+        serde_json::to_value((self.defaults)()).expect("settings serialise")
+    }
+    fn check(&self, settings: &Value) -> Result<Value, String> {
+        let s = self.parse(settings)?;
+        Ok(serde_json::to_value(s).expect("settings serialise"))
+    }
+    fn build(&self, settings: &Value, ctx: &BuildContext) -> Result<Renderer, String> {
+        if ctx.shutter != 0.0 && !self.capabilities.motion_blur {
+            return Err(format!(
+                "--shutter (motion blur) is not implemented for --method {} (it is for: {})",
+                self.name,
+                names_where(|c| c.motion_blur).join(", ")
+            ));
         }
+        crate::motion_blur::check_shutter(ctx.shutter)?;
+        Ok((self.build)(self.parse(settings)?, ctx, self.name))
+    }
+}
+
+fn full_defaults<S: Serialize>(p: &Preset<S>) -> Value {
+    serde_json::to_value((p.defaults)()).expect("settings serialise")
+}
+
+/// Which neighbouring frames a technique needs around the frames it outputs (what a
+/// farm segment must compute besides its own frames).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct FrameContext {
+    /// Frames before / after an output frame whose scenes (and, for windowed
+    /// techniques, samples) it uses.
+    pub before: u32,
+    pub after: u32,
+    /// The frames before must be *rendered*, in order (a stateful technique's history),
+    /// not only be present in the frame list.
+    pub render_before: bool,
+    /// With this context an output frame is bit-identical to the same frame of a single
+    /// run over the whole range (its samples depend only on seed, frame, pixel and index);
+    /// otherwise a segment's first frames start from a shorter history and the seam is
+    /// measured instead.
+    pub exact: bool,
+}
+
+/// Warm-up frames a stateful technique without a window gets at a segment's start.
+pub const STATEFUL_WARM_UP: u32 = 8;
+
+/// The [`FrameContext`] of `technique` with `settings`, from its capabilities: frame by
+/// frame needs nothing; a windowed technique needs its `window` (K) frames on each side
+/// (the frames enter the frame list and are traced as its window requires, exactly as in
+/// a single run); any other stateful technique gets [`STATEFUL_WARM_UP`] rendered frames
+/// of history, and is not exact.
+pub fn frame_context(technique: &dyn Technique, settings: &Value) -> FrameContext {
+    let c = technique.capabilities();
+    if c.stateless {
+        return FrameContext {
+            before: 0,
+            after: 0,
+            render_before: false,
+            exact: true,
+        };
+    }
+    let window = find_key(settings, "window")
+        .and_then(|k| k.split('.').try_fold(settings, |v, p| v.get(p)).cloned())
+        .and_then(|v| v.as_u64());
+    match (c.window, window) {
+        (true, Some(k)) => FrameContext {
+            before: k as u32,
+            after: k as u32,
+            render_before: false,
+            exact: true,
+        },
+        _ => FrameContext {
+            before: STATEFUL_WARM_UP,
+            after: 0,
+            render_before: true,
+            exact: false,
+        },
+    }
+}
+
+/// Every technique, in the order `--help` lists them.
+pub static TECHNIQUES: &[&dyn Technique] = &[
+    &crate::pt::TECHNIQUE,
+    &crate::bdpt::TECHNIQUE,
+    &crate::dept::TECHNIQUE,
+    &crate::dept::SPATIAL,
+    &crate::dept::BILATERAL,
+    &crate::temporal::stbpt::TECHNIQUE,
+    &crate::temporal::spacetime_dept::TECHNIQUE,
+];
+
+/// The technique called `name`, or an error listing the known ones.
+pub fn find(name: &str) -> Result<&'static dyn Technique, String> {
+    TECHNIQUES
+        .iter()
+        .copied()
+        .find(|t| t.name() == name)
+        .ok_or_else(|| format!("unknown method '{name}' (known: {})", names().join(", ")))
+}
+
+/// The names of every technique.
+pub fn names() -> Vec<&'static str> {
+    TECHNIQUES.iter().map(|t| t.name()).collect()
+}
+
+/// The names of the techniques with a capability.
+pub fn names_where(f: impl Fn(&Capabilities) -> bool) -> Vec<&'static str> {
+    TECHNIQUES
+        .iter()
+        .filter(|t| f(&t.capabilities()))
+        .map(|t| t.name())
+        .collect()
+}
+
+/// `--help` text: one line per technique.
+pub fn help_list() -> String {
+    TECHNIQUES
+        .iter()
+        .map(|t| format!("`{}`: {}", t.name(), t.summary()))
+        .collect::<Vec<_>>()
+        .join("; ")
+}
+
+/// Merges `over` into `base` (objects key by key, recursively; anything else replaces).
+pub fn merge(base: &mut Value, over: &Value) {
+    match (base, over) {
+        (Value::Object(b), Value::Object(o)) => {
+            for (k, v) in o {
+                match b.get_mut(k) {
+                    Some(slot) if slot.is_object() && v.is_object() => merge(slot, v),
+                    _ => {
+                        b.insert(k.clone(), v.clone());
+                    }
+                }
+            }
+        }
+        (b, o) => *b = o.clone(),
+    }
+}
+
+/// Every settable leaf of a settings object, nested ones as `outer.inner` (what error
+/// messages list as the valid keys).
+pub fn keys(settings: &Value) -> Vec<String> {
+    paths(settings, false)
+}
+
+/// Every path of a settings object: leaves and, with `objects`, the objects too (an
+/// embedded baseline's settings, a tagged enum such as `filter`, can be set whole).
+fn paths(settings: &Value, objects: bool) -> Vec<String> {
+    fn walk(v: &Value, prefix: &str, objects: bool, out: &mut Vec<String>) {
+        if let Value::Object(m) = v {
+            for (k, v) in m {
+                let key = if prefix.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{prefix}.{k}")
+                };
+                if v.is_object() {
+                    if objects {
+                        out.push(key.clone());
+                    }
+                    walk(v, &key, objects, out);
+                } else {
+                    out.push(key);
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    walk(settings, "", objects, &mut out);
+    out
+}
+
+/// The full path of `key` in `settings`: itself when it is a path there, else the one
+/// nested path whose last component is `key` (so `spp` finds `bdpt.spp` in stbpt's
+/// settings, which embed bdpt's). `None` when absent or ambiguous.
+pub fn find_key(settings: &Value, key: &str) -> Option<String> {
+    let all = paths(settings, true);
+    if all.iter().any(|k| k == key) {
+        return Some(key.to_string());
+    }
+    let suffix = format!(".{key}");
+    let mut hits = all.into_iter().filter(|k| k.ends_with(&suffix));
+    let first = hits.next()?;
+    hits.next().is_none().then_some(first)
+}
+
+/// Parses the value of `--set key=value`: JSON when it is JSON (numbers, `true`, `null`,
+/// `{"Gaussian": {"radius": 3}}`), else the text as a string (`--set mis=balance`).
+pub fn parse_value(text: &str) -> Value {
+    serde_json::from_str(text).unwrap_or_else(|_| Value::String(text.to_string()))
+}
+
+/// Sets `key` (a path of [`keys`], or a unique last component, see [`find_key`]) in
+/// `settings` to `value`. Errors name the valid keys.
+pub fn set_key(settings: &mut Value, key: &str, value: Value) -> Result<(), String> {
+    let path = find_key(settings, key).ok_or_else(|| {
+        format!(
+            "unknown setting '{key}' (valid keys: {})",
+            keys(settings).join(", ")
+        )
+    })?;
+    let mut v = settings;
+    let parts: Vec<&str> = path.split('.').collect();
+    for p in &parts[..parts.len() - 1] {
+        v = v.get_mut(*p).expect("path from keys()");
+    }
+    let m: &mut Map<String, Value> = v.as_object_mut().expect("object");
+    m.insert(parts[parts.len() - 1].to_string(), value);
+    Ok(())
+}
+
+/// The settings of `technique` from its defaults, then `config` (a partial settings
+/// object, e.g. from `--config`), then each `(key, value)` of `sets` in order; checked and
+/// completed by the technique. An unknown key or a bad value is an error naming the key.
+pub fn resolve(
+    technique: &dyn Technique,
+    config: Option<&Value>,
+    sets: &[(String, Value)],
+) -> Result<Value, String> {
+    let mut s = technique.defaults();
+    if let Some(c) = config {
+        if !c.is_object() {
+            return Err(format!(
+                "the settings of --method {} must be a JSON object",
+                technique.name()
+            ));
+        }
+        // Unknown keys are refused by the settings type (serde, deny_unknown_fields).
+        merge(&mut s, c);
+    }
+    for (k, v) in sets {
+        set_key(&mut s, k, v.clone())
+            .map_err(|e| format!("--set {k}: {e} (method {})", technique.name()))?;
+        technique
+            .check(&s)
+            .map_err(|e| format!("--set {k}={v}: {e}"))?;
+    }
+    technique.check(&s)
+}
+
+/// Applies `--photons N|auto` to photon settings: a count sets `photons` and clears
+/// `auto`; `auto` sets the stopping rule's defaults.
+pub fn set_photons(
+    settings: &mut Value,
+    count: &crate::dept::budget::PhotonCount,
+) -> Result<(), String> {
+    use crate::dept::budget::PhotonCount;
+    match count {
+        PhotonCount::Fixed(n) => {
+            set_key(settings, "photons", Value::from(*n))?;
+            set_key(settings, "auto", Value::Null)
+        }
+        PhotonCount::Auto(a) => set_key(
+            settings,
+            "auto",
+            serde_json::to_value(a).map_err(|e| e.to_string())?,
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_technique_has_a_unique_name_and_checks_its_own_defaults() {
+        let mut seen = std::collections::HashSet::new();
+        for t in TECHNIQUES {
+            assert!(seen.insert(t.name()), "duplicate {}", t.name());
+            let d = t.defaults();
+            assert_eq!(t.check(&d).unwrap(), d, "{}", t.name());
+            let e = t.capabilities().effort;
+            assert!(
+                find_key(&d, e.key).is_some(),
+                "{}: effort key {}",
+                t.name(),
+                e.key
+            );
+        }
+    }
+
+    #[test]
+    fn set_finds_nested_keys_and_rejects_unknown_ones() {
+        let t = find("stbpt").unwrap();
+        let s = resolve(
+            t,
+            None,
+            &[
+                ("window".into(), parse_value("6")),
+                ("spp".into(), parse_value("3")),
+                ("bdpt.mis".into(), parse_value("balance")),
+            ],
+        )
+        .unwrap();
+        assert_eq!(s["window"], 6);
+        assert_eq!(s["bdpt"]["spp"], 3);
+        let e = resolve(t, None, &[("windw".into(), parse_value("6"))]).unwrap_err();
+        assert!(
+            e.contains("unknown setting 'windw'") && e.contains("film_budget_mb"),
+            "{e}"
+        );
+        let e = resolve(t, None, &[("window".into(), parse_value("six"))]).unwrap_err();
+        assert!(e.contains("--set window=\"six\""), "{e}");
+        let e = resolve(t, Some(&serde_json::json!({"bdpt": {"sp": 1}})), &[]).unwrap_err();
+        assert!(e.contains("unknown field `sp`"), "{e}");
+    }
+
+    #[test]
+    fn presets_are_settings_of_one_technique() {
+        let spatial = find("dept-spatial").unwrap().defaults();
+        let plain = find("dept").unwrap();
+        let s = resolve(plain, None, &[("filter".into(), spatial["filter"].clone())]).unwrap();
+        assert_eq!(s, spatial);
     }
 }

@@ -1,7 +1,16 @@
-//! Frame sequences: the [`SequenceRenderer`] contract and the frame-by-frame wrapper used
-//! by every baseline.
+//! Frame sequences: the [`SequenceRenderer`] contract every technique implements, its
+//! progressive form ([`SequenceRenderer::render_passes`]), and the frame-by-frame wrapper
+//! used by every baseline.
+//!
+//! A technique never names another one and the driver never names a technique: the
+//! registry ([`crate::registry`]) builds a `Box<dyn SequenceRenderer>` from settings, and
+//! the one run loop ([`crate::run`]) drives it. What a technique wants to say about a
+//! frame (photons shot, reuse statistics, …) travels with the frame in
+//! [`RenderedFrame::report`], not through per-technique hooks on this trait.
 
 use crate::integrator::{Integrator, RenderedFrame};
+use chronolux_core::color::Rgb;
+use chronolux_core::sampling::hash_words;
 use chronolux_core::scene::source::FrameSource;
 
 /// Renders the frames of an animation in increasing order; may keep state between frames
@@ -9,6 +18,7 @@ use chronolux_core::scene::source::FrameSource;
 pub trait SequenceRenderer {
     /// Short name of the technique (`path`, ...).
     fn name(&self) -> &'static str;
+
     /// Renders frame `frame`, taking its scene (and, for techniques with a window, the
     /// scenes of neighbouring frames) from `source`.
     fn render_frame(
@@ -18,19 +28,71 @@ pub trait SequenceRenderer {
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame;
 
-    /// Photons emitted for the frame last rendered (photon methods; `None` otherwise).
-    fn photons_last_frame(&self) -> Option<u64> {
-        None
-    }
-
-    /// Sample reuse of the frame last rendered (sample-reusing methods; `None` otherwise).
-    fn reuse_last_frame(&self) -> Option<ReuseStats> {
-        None
+    /// Renders `frame` as successive refinements. Each [`Pass`] is handed to `on_pass`,
+    /// which may stop the refinement ([`Flow::Stop`]: cancellation between passes); the
+    /// returned frame is the combination of every pass made. `plan` bounds the effort.
+    ///
+    /// The default makes one pass, the whole frame ([`Self::render_frame`]): a technique
+    /// that cannot refine still serves a progressive consumer, with one refinement.
+    fn render_passes(
+        &mut self,
+        source: &mut FrameSource,
+        frame: u32,
+        plan: PassPlan,
+        progress: &(dyn Fn(u64) + Sync),
+        on_pass: &mut dyn FnMut(&Pass) -> Flow,
+    ) -> RenderedFrame {
+        let _ = plan;
+        let out = self.render_frame(source, frame, progress);
+        on_pass(&Pass {
+            index: 0,
+            spp: 0,
+            total_spp: 0,
+            image: &out,
+            independent: false,
+        });
+        out
     }
 }
 
+/// What a progressive consumer asks for: the samples per pixel of the first pair of
+/// passes (both together) and the most samples per pixel of the frame in all.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PassPlan {
+    pub first_spp: u32,
+    pub max_spp: u32,
+}
+
+/// One refinement of a frame.
+pub struct Pass<'a> {
+    /// 0, 1, 2, … in the order made.
+    pub index: u32,
+    /// Samples per pixel of this pass alone (0 when the technique does not count so).
+    pub spp: u32,
+    /// Samples per pixel of all passes so far, this one included.
+    pub total_spp: u32,
+    /// This pass alone: an estimate of the frame from its own samples.
+    pub image: &'a RenderedFrame,
+    /// Whether the passes are independent estimates (each from its own randomisation),
+    /// so that the spread between them estimates the error (see `chronolux reference`).
+    pub independent: bool,
+}
+
+/// Whether a progressive rendering goes on after a pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flow {
+    Continue,
+    Stop,
+}
+
+/// Seed of pass `2·round + half` of the paired-doubling schedule: every pass gets its
+/// own Owen scrambling of the Sobol sequence, an independent randomisation.
+pub fn batch_seed(seed: u64, round: u32, half: u32) -> u64 {
+    hash_words(&[seed, 0x7265_6665_7265_6e63, round as u64, half as u64])
+}
+
 /// How much a frame of a sample-reusing technique got from its window.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ReuseStats {
     /// Frames of the render list in the frame's window (generated frames that served it).
     pub window: u32,
@@ -71,5 +133,87 @@ impl<I: Integrator> SequenceRenderer for FrameByFrame<I> {
     ) -> RenderedFrame {
         let scene = source.frame(frame);
         self.integrator.render(&scene, frame, progress)
+    }
+
+    /// Passes of the **paired-doubling** schedule when the integrator can be re-batched
+    /// ([`Integrator::batch`]): passes come in pairs (A, B) of equal sample count, pair 0
+    /// with `first_spp / 2` each (at least 1), every later pair with as many as each half
+    /// already has, so the total doubles with each pair; the last pair is cut to
+    /// `max_spp`. Pass `2r + h` draws from [`batch_seed`]`(seed, r, h)`, so all passes are
+    /// independent, and the two halves' difference estimates the error of their mean.
+    /// The result is the sample-weighted mean of all passes.
+    fn render_passes(
+        &mut self,
+        source: &mut FrameSource,
+        frame: u32,
+        plan: PassPlan,
+        progress: &(dyn Fn(u64) + Sync),
+        on_pass: &mut dyn FnMut(&Pass) -> Flow,
+    ) -> RenderedFrame {
+        if self.integrator.batch(1, 0, 0).is_none() {
+            let out = self.render_frame(source, frame, progress);
+            on_pass(&Pass {
+                index: 0,
+                spp: 0,
+                total_spp: 0,
+                image: &out,
+                independent: false,
+            });
+            return out;
+        }
+        let scene = source.frame(frame);
+        let mut batch = (plan.first_spp / 2).max(1);
+        let mut n_half = 0u32;
+        let mut acc: Option<RenderedFrame> = None;
+        let mut sum: Vec<Rgb> = Vec::new();
+        let mut index = 0u32;
+        'rounds: for round in 0.. {
+            for half in 0..2 {
+                let integ = self
+                    .integrator
+                    .batch(batch, round, half)
+                    .expect("re-batchable");
+                let out = integ.render(&scene, frame, progress);
+                if sum.is_empty() {
+                    sum = vec![Rgb::ZERO; out.pixels.len()];
+                }
+                for (s, p) in sum.iter_mut().zip(&out.pixels) {
+                    *s += *p * batch as f32;
+                }
+                let total = 2 * n_half + (half + 1) * batch;
+                let flow = on_pass(&Pass {
+                    index,
+                    spp: batch,
+                    total_spp: total,
+                    image: &out,
+                    independent: true,
+                });
+                index += 1;
+                acc = Some(match acc.take() {
+                    None => out,
+                    Some(mut a) => {
+                        a.stats += out.stats;
+                        a.invalid_samples += out.invalid_samples;
+                        a
+                    }
+                });
+                // Only whole pairs end a frame, so both halves always hold equal samples.
+                if half == 1 {
+                    n_half += batch;
+                    let room = (plan.max_spp / 2).saturating_sub(n_half);
+                    if flow == Flow::Stop || room == 0 {
+                        break 'rounds;
+                    }
+                    batch = n_half.min(room);
+                }
+            }
+        }
+        let mut out = acc.expect("at least one pass");
+        let inv = 1.0 / (2 * n_half) as f32;
+        out.pixels = sum.iter().map(|s| *s * inv).collect();
+        // The per-pass variances are not combined (passes of different sizes): the
+        // consumer of independent passes estimates the error from their spread.
+        out.variance = vec![Rgb::ZERO; out.pixels.len()];
+        out
     }
 }

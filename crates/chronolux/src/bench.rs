@@ -26,8 +26,9 @@ use chronolux_core::sampling::warps::{sample_uniform_sphere, sample_uniform_tria
 use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};
 use chronolux_core::scene::generated::TerrainSpheres;
-use chronolux_render::integrator::Integrator;
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_core::scene::source::FrameSource;
+use chronolux_render::registry::{self, BuildContext};
+use chronolux_render::run::MemorySink;
 use clap::{Args, Subcommand};
 use rayon::prelude::*;
 use serde_json::{Value, json};
@@ -53,7 +54,7 @@ pub enum BenchCommand {
     Pt(PtArgs),
     /// Equal-quality benchmark: time (and flicker) for a method and its baseline to reach
     /// target HDR-FLIP errors against converged references.
-    Quality(crate::quality::QualityArgs),
+    Quality(Box<crate::quality::QualityArgs>),
 }
 
 /// Scene choice and common settings of `rays` and `build`.
@@ -136,7 +137,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         BenchCommand::Rays(a) => rays(a),
         BenchCommand::Build(a) => build(a),
         BenchCommand::Pt(a) => pt(a),
-        BenchCommand::Quality(a) => crate::quality::run(a),
+        BenchCommand::Quality(a) => crate::quality::run(*a),
     }
 }
 
@@ -533,23 +534,42 @@ fn pt(a: PtArgs) -> Result<()> {
     let start = Instant::now();
     let input = scene_input::load(&a.scene)?;
     let load_s = start.elapsed().as_secs_f64();
-    let mut builder = FrameBuilder::new(Arc::new(input.desc), input.animation, input.camera, w, h)?;
-    let tracer = PathTracer::new(PathSettings {
-        spp: a.spp,
-        max_depth: (a.max_depth > 0).then_some(a.max_depth),
-        ..Default::default()
-    });
+    let desc = Arc::new(input.desc);
+    // The registry's path tracer through the one run loop; each frame's scene is built
+    // (and timed) first, so the loop's time is the rendering alone.
+    let tech = registry::find("path").map_err(anyhow::Error::msg)?;
+    let mut settings = serde_json::json!({ "spp": a.spp });
+    if a.max_depth > 0 {
+        settings["max_depth"] = a.max_depth.into();
+    }
+    let settings = registry::resolve(tech, Some(&settings), &[]).map_err(anyhow::Error::msg)?;
     let mut per_frame: Vec<(Vec<f64>, Vec<f64>, u64, u64)> =
         vec![(vec![], vec![], 0, 0); frames.len()];
     for _ in 0..a.rounds.max(1) {
+        let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+        let mut source = FrameSource::new(builder, a.fps, frames.clone());
+        let mut tracer = tech
+            .build(&settings, &BuildContext::default())
+            .map_err(anyhow::Error::msg)?;
         for (k, &f) in frames.iter().enumerate() {
             let t0 = Instant::now();
-            let scene = pool.install(|| builder.build(f as f32 / a.fps));
-            let t1 = Instant::now();
-            let out = pool.install(|| tracer.render(&scene, f, &|_| {}));
-            let render_s = t1.elapsed().as_secs_f64();
-            per_frame[k].0.push((t1 - t0).as_secs_f64());
-            per_frame[k].1.push(render_s);
+            pool.install(|| source.frame(f));
+            let build_s = t0.elapsed().as_secs_f64();
+            let mut sink = MemorySink::new();
+            let run = pool
+                .install(|| {
+                    chronolux_render::run::run(
+                        tracer.as_mut(),
+                        &mut source,
+                        &[f],
+                        &mut [&mut sink],
+                        None,
+                    )
+                })
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+            let out = &sink.frames[0].1;
+            per_frame[k].0.push(build_s);
+            per_frame[k].1.push(run.wall_s);
             per_frame[k].2 = out.stats.samples;
             per_frame[k].3 = out.stats.rays + out.stats.shadow_rays;
         }

@@ -30,6 +30,15 @@ pub enum Command {
     Reference(crate::reference::ReferenceArgs),
     /// Measure speed: ray casting, BVH builds, path samples, equal-quality comparisons.
     Bench(crate::bench::BenchArgs),
+    /// Cut a render into segments for a farm: the frames each owns and the neighbouring
+    /// frames its technique needs (printed as JSON; `render --plan` runs a segment).
+    Plan(crate::farm::PlanArgs),
+    /// Write (and optionally submit) a farm job: `slurm` (sbatch job array) or `openjd`
+    /// (Open Job Description template for Deadline Cloud).
+    Farm(crate::farm::FarmArgs),
+    /// Check a farm render's folder: every frame present and readable, manifests merged
+    /// into run.json, preview written, seams between segments measured.
+    Assemble(crate::farm::AssembleArgs),
 }
 
 /// Which scene and how to present it; shared by every subcommand that loads a scene.
@@ -64,16 +73,13 @@ pub struct RenderArgs {
     #[arg(long, value_name = "RANGE", allow_hyphen_values = true)]
     pub frames: Option<String>,
     /// Frames per second of the animation timeline (above 0, at most 1000).
-    #[arg(
-        long,
-        default_value_t = 24.0,
-        value_name = "FPS",
-        allow_negative_numbers = true
-    )]
-    pub fps: f32,
-    /// Samples per pixel (1 to 1048576).
-    #[arg(long, default_value_t = 64, value_name = "N")]
-    pub spp: u32,
+    /// Default 24 (or the `--config` file's).
+    #[arg(long, value_name = "FPS", allow_negative_numbers = true)]
+    pub fps: Option<f32>,
+    /// Samples per pixel (1 to 1048576): the technique's `spp` setting. Default: the
+    /// technique's (64 for path, bdpt and stbpt; 16 camera samples for the photon methods).
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
     /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384). Default: 512 wide, height
     /// from the camera's aspect ratio (square when the camera gives none); 256x256 for the
     /// built-in demo.
@@ -83,28 +89,34 @@ pub struct RenderArgs {
     /// emitters only, 2 adds direct lighting. Default: unlimited (Russian roulette ends paths).
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
-    /// Light-transport method. `path`: unidirectional path tracing (the reference);
-    /// `bdpt`: bidirectional path tracing, frame by frame; `dept`, `dept-spatial`,
-    /// `dept-bilateral`: photon density estimation on mesh elements, frame by frame (no,
-    /// Gaussian, bilateral spatial filter); `spacetime-dept`: photons shared over a
-    /// per-element temporal window with a bilateral filter; `stbpt`: bidirectional samples
-    /// reused over the frames of a window (see --window).
-    #[arg(long, default_value = "path", value_name = "METHOD", value_parser = ["path", "bdpt", "dept", "dept-spatial", "dept-bilateral", "spacetime-dept", "stbpt"])]
-    pub method: String,
+    /// Light-transport method (default `path`). Every technique's settings can be set with
+    /// --set; an unknown key (e.g. `--set list=1`) lists the valid ones.
+    #[arg(long, value_name = "METHOD", long_help = method_help(),
+          value_parser = clap::builder::PossibleValuesParser::new(chronolux_render::registry::names()))]
+    pub method: Option<String>,
+    /// Set any setting of the chosen technique, `KEY=VALUE` (repeatable), e.g.
+    /// `--set window=6 --set film_budget_mb=256`. Nested keys as `bdpt.mis=balance`, or by
+    /// their last part when unique (`spp` is stbpt's `bdpt.spp`). VALUE is JSON when it
+    /// parses as JSON, else text. An unknown key lists the valid ones. Applied after every
+    /// other flag, in order.
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Read the configuration from a JSON file: a `run.json` of an earlier render (its
+    /// settings are replayed: the same frames, bit for bit), or an object of the
+    /// technique's settings. Flags given on the command line override the file.
+    #[arg(long, value_name = "FILE.json")]
+    pub config: Option<PathBuf>,
     /// Motion blur: fraction of the frame interval the shutter is open, in [0, 1], centred
     /// on the frame time (Blender's default); 0 = no motion blur. `path` and `bdpt`: each
     /// pixel sample gets a time in the shutter, the scene is built at min(spp, 16) instants.
     /// `stbpt`: each sample's trajectory across the shutter (its point in the neighbouring
     /// frames) is splatted over the pixels it crosses.
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "S",
-        allow_negative_numbers = true
-    )]
-    pub shutter: f32,
-    /// `stbpt` only: each sample serves the frames f-K..f+K of the one it was made for
-    /// (0 to 31). Default 4.
+    /// Default 0. Techniques with motion blur: path, bdpt, stbpt.
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    pub shutter: Option<f32>,
+    /// The technique's `window` setting: `stbpt`: each sample serves the frames f-K..f+K
+    /// of the one it was made for (0 to 31, default 4); `spacetime-dept`: frames pooled on
+    /// each side (default 8).
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=31))]
     pub window: Option<u32>,
     /// Photons per frame of the photon methods (`dept`, `dept-spatial`, `dept-bilateral`;
@@ -115,9 +127,9 @@ pub struct RenderArgs {
     /// (`spacetime-dept`). run.json records the photons of every frame.
     #[arg(long, value_name = "N|auto")]
     pub photons: Option<String>,
-    /// Seed of every random sequence; the same seed gives bit-identical images.
-    #[arg(long, default_value_t = 0, value_name = "S")]
-    pub seed: u64,
+    /// Seed of every random sequence; the same seed gives bit-identical images. Default 0.
+    #[arg(long, value_name = "S")]
+    pub seed: Option<u64>,
     /// Worker threads (default: all cores). Images do not depend on it.
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
@@ -125,20 +137,25 @@ pub struct RenderArgs {
     /// (sRGB), with run.json and preview.gif (and preview.mp4 when ffmpeg is installed).
     #[arg(long, short, default_value = "out", value_name = "DIR")]
     pub output: PathBuf,
-    /// Exposure of the PNG and preview in stops (the EXR is never altered).
-    #[arg(
-        long,
-        default_value_t = 0.0,
-        value_name = "EV",
-        allow_negative_numbers = true
-    )]
-    pub exposure: f32,
+    /// Exposure of the PNG and preview in stops (the EXR is never altered). Default 0.
+    #[arg(long, value_name = "EV", allow_negative_numbers = true)]
+    pub exposure: Option<f32>,
     /// Skip frames whose EXR and PNG are already complete in the output folder.
     #[arg(long)]
     pub resume: bool,
     /// Do not write the animated preview.
     #[arg(long)]
     pub no_preview: bool,
+    /// Render one segment of a farm plan (`chronolux plan`, `chronolux farm`): the plan
+    /// fixes every setting, so only --segment, --output, --threads, --resume and
+    /// --no-preview may be given with it.
+    #[arg(long, value_name = "PLAN.json", requires = "segment")]
+    pub plan: Option<PathBuf>,
+    /// Index of the segment of --plan to render (0-based): it computes the frames its
+    /// technique needs around its own and writes only its own frames, with its manifest
+    /// `run.segment-NNNN.json`.
+    #[arg(long, value_name = "I", requires = "plan")]
+    pub segment: Option<u32>,
 }
 
 #[derive(Args, Debug)]
@@ -148,4 +165,16 @@ pub struct InfoArgs {
     /// Print JSON instead of text.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `--method`'s long help: every technique of the registry with its summary.
+pub fn method_help() -> String {
+    let mut s = String::from(
+        "Light-transport method (default `path`). Every setting of a technique can be set \
+with --set KEY=VALUE; an unknown key lists the valid ones.\n",
+    );
+    for t in chronolux_render::registry::TECHNIQUES {
+        s += &format!("\n  {:<16} {}", t.name(), t.summary());
+    }
+    s
 }

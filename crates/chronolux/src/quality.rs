@@ -12,6 +12,7 @@
 //! is the speed-up.
 
 use crate::cli::SceneArgs;
+use crate::config::{FlagSetting, parse_sets, technique_settings};
 use crate::render::{parse_frames, parse_resolution};
 use crate::scene_input;
 use anyhow::{Context, Result, bail};
@@ -19,24 +20,26 @@ use chronolux_core::metrics::{self, flip};
 use chronolux_core::scene::frame::FrameBuilder;
 use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::read_exr;
-use chronolux_render::dept::DeptSettings;
-use chronolux_render::pt::PathSettings;
-use chronolux_render::registry::TechniqueConfig;
-use chronolux_render::temporal::spacetime_dept::SpacetimeSettings;
-use chronolux_render::temporal::stbpt::StbptSettings;
+use chronolux_render::registry::{self, BuildContext, Technique};
+use chronolux_render::run::MemorySink;
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Instant;
 
 #[derive(Args, Debug)]
 pub struct QualityArgs {
     #[command(flatten)]
     pub scene: SceneArgs,
-    /// Frames to measure: `A..B`, `A..=B` or `N`.
+    /// Frames to render: `A..B`, `A..=B` or `N`.
     #[arg(long, value_name = "RANGE")]
     pub frames: String,
+    /// Frames to score, a subset of --frames: comma-separated ranges or frames, e.g.
+    /// `0..8,24,47`. Default: every rendered frame. Render more than you score so that a
+    /// temporal technique's windows are whole where it is measured (not truncated by the
+    /// ends of a short clip). Flicker is taken over consecutive measured frames.
+    #[arg(long, value_name = "FRAMES")]
+    pub measure: Option<String>,
     /// Folder of converged reference frames (frame_NNNN.exr), e.g. made by
     /// `chronolux reference`.
     #[arg(long, value_name = "DIR")]
@@ -73,10 +76,17 @@ pub struct QualityArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
-    /// Half-width K of the reuse window of `stbpt` (samples serve [f − K, f + K]).
-    /// Default: the method's default (4). Recorded in the JSON.
+    /// The `window` setting (stbpt's K: samples serve [f − K, f + K]; spacetime-dept's
+    /// frames pooled on each side) of the methods that have one. Default: each method's.
+    /// Recorded in the JSON.
     #[arg(long, value_name = "K")]
     pub window: Option<u32>,
+    /// Set any setting of --method, `KEY=VALUE` (repeatable; as `render --set`).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    pub set: Vec<String>,
+    /// Set any setting of --baseline, `KEY=VALUE` (repeatable).
+    #[arg(long = "baseline-set", value_name = "KEY=VALUE")]
+    pub baseline_set: Vec<String>,
     /// Write a Markdown report (tables of every effort level) to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
@@ -94,7 +104,7 @@ pub struct Level {
     pub flip_mean: f64,
     pub flip_max: f64,
     pub relmse_mean: f64,
-    /// Mean over consecutive frame pairs (None for a single frame).
+    /// Mean over pairs of measured frames consecutive in the render (None if no pair).
     pub flicker: Option<f64>,
 }
 
@@ -158,7 +168,11 @@ pub struct QualityResult {
     pub method: String,
     pub baseline: Option<String>,
     pub criterion: String,
+    /// Frames rendered at each level.
     pub frames: Vec<u32>,
+    /// Frames scored (`--measure`; all rendered frames by default); flicker is over
+    /// the pairs of them that are consecutive in `frames`.
+    pub measured: Vec<u32>,
     pub target_flip: f64,
     pub method_time_s: Option<f64>,
     pub baseline_time_s: Option<f64>,
@@ -181,78 +195,61 @@ pub struct QualityResult {
     pub results: Vec<MethodResult>,
 }
 
-/// Process CPU seconds (user + system) from /proc/self/stat (Linux; USER_HZ = 100, the
-/// value every Linux ABI fixes for this interface). `None` elsewhere.
-fn cpu_seconds() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the parenthesised command name; utime and stime are fields 14 and 15.
-    let rest = &s[s.rfind(')')? + 2..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let (u, k): (f64, f64) = (f.get(11)?.parse().ok()?, f.get(12)?.parse().ok()?);
-    Some((u + k) / 100.0)
-}
-
-/// The technique of `method` at `effort`: samples per pixel for `path`, thousands of
-/// photons per frame for the photon methods.
+/// The settings of `method` at `effort` (the unit its registry entry gives: samples per
+/// pixel, or thousands of photons per frame). `max_depth`, `seed` and `window` apply to
+/// the methods that have such a setting (they are given for the pair of methods).
 pub fn config_for(
     method: &str,
     effort: u32,
     max_depth: Option<u32>,
     seed: u64,
     window: Option<u32>,
-) -> Result<TechniqueConfig> {
-    Ok(match method {
-        "path" => TechniqueConfig::Path(PathSettings {
-            spp: effort,
-            max_depth,
-            rr_depth: 5,
-            seed,
-        }),
-        "bdpt" => TechniqueConfig::Bdpt(chronolux_render::bdpt::BdptSettings {
-            spp: effort,
-            max_depth,
-            seed,
-            ..Default::default()
-        }),
-        // Samples generated per pixel and frame; each serves up to 2K + 1 frames.
-        "stbpt" => TechniqueConfig::Stbpt(chronolux_render::temporal::stbpt::StbptSettings {
-            bdpt: chronolux_render::bdpt::BdptSettings {
-                spp: effort,
-                max_depth,
-                seed,
-                ..Default::default()
-            },
-            window: window.unwrap_or(StbptSettings::default().window),
-            ..Default::default()
-        }),
-        // Photon methods: effort = thousands of photons per frame (the per-frame budget
-        // for spacetime-dept); camera samples stay at the method's default.
-        "dept" | "dept-spatial" | "dept-bilateral" => {
-            let base = match method {
-                "dept" => DeptSettings::default(),
-                "dept-spatial" => DeptSettings::spatial(),
-                _ => DeptSettings::bilateral(),
-            };
-            let s = DeptSettings {
-                photons: effort as u64 * 1000,
-                seed,
-                ..base
-            };
-            match method {
-                "dept" => TechniqueConfig::Dept(s),
-                "dept-spatial" => TechniqueConfig::DeptSpatial(s),
-                _ => TechniqueConfig::DeptBilateral(s),
-            }
-        }
-        "spacetime-dept" => TechniqueConfig::SpacetimeDept(SpacetimeSettings {
-            photons: effort as u64 * 1000,
-            seed,
-            ..Default::default()
-        }),
-        m => bail!(
-            "bench quality does not know how to scale the effort of method '{m}' (known: path, bdpt, stbpt, dept, dept-spatial, dept-bilateral, spacetime-dept)"
+    sets: &[(String, serde_json::Value)],
+) -> Result<(&'static dyn Technique, serde_json::Value)> {
+    let tech = registry::find(method).map_err(anyhow::Error::msg)?;
+    let e = tech.capabilities().effort;
+    let amount = u64::from(effort) * e.per_unit;
+    let defaults = tech.defaults();
+    let mut flags = Vec::new();
+    let mut photons = None;
+    if tech.capabilities().photons && e.key == "photons" {
+        photons = Some(amount.to_string());
+    } else {
+        flags.push(FlagSetting {
+            flag: "the effort",
+            key: e.key,
+            value: amount.into(),
+        });
+    }
+    let optional = [
+        (
+            "--max-depth",
+            "max_depth",
+            max_depth.map(serde_json::Value::from),
         ),
-    })
+        ("--seed", "seed", Some(seed.into())),
+        ("--window", "window", window.map(serde_json::Value::from)),
+    ];
+    for (flag, key, value) in optional {
+        if let Some(value) = value
+            && registry::find_key(&defaults, key).is_some()
+        {
+            flags.push(FlagSetting { flag, key, value });
+        }
+    }
+    let s = technique_settings(tech, None, &flags, photons.as_deref(), sets)?;
+    Ok((tech, s))
+}
+
+/// Parses `--measure`: comma-separated `A..B`, `A..=B` or `N`.
+pub fn parse_measure(s: &str) -> Result<Vec<u32>> {
+    let mut v = Vec::new();
+    for part in s.split(',') {
+        v.extend(parse_frames(part)?);
+    }
+    v.sort_unstable();
+    v.dedup();
+    Ok(v)
 }
 
 fn meets(level: &Level, target: f64, criterion: &str) -> bool {
@@ -274,8 +271,17 @@ pub fn run(args: QualityArgs) -> Result<()> {
     crate::render::set_threads(args.threads)?;
     crate::render::check_fps_and_depth(args.fps, args.max_depth)?;
     let frames = parse_frames(&args.frames)?;
+    let measured = match &args.measure {
+        Some(m) => parse_measure(m)?,
+        None => frames.clone(),
+    };
+    if let Some(f) = measured.iter().find(|f| !frames.contains(f)) {
+        bail!("--measure names frame {f}, which --frames does not render");
+    }
+    let method_sets = parse_sets(&args.set)?;
+    let baseline_sets = parse_sets(&args.baseline_set)?;
     let mut refs = Vec::new();
-    for &f in &frames {
+    for &f in &measured {
         let p = args
             .reference
             .join(format!("{}.exr", chronolux_io::output::frame_stem(f)));
@@ -299,32 +305,48 @@ pub fn run(args: QualityArgs) -> Result<()> {
     let desc = Arc::new(input.desc);
     let mut methods = vec![args.method.clone()];
     methods.extend(args.baseline.clone());
-    for m in &methods {
-        config_for(m, 1, None, 0, args.window)?;
+    let sets_of = |k: usize| if k == 0 { &method_sets } else { &baseline_sets };
+    for (k, m) in methods.iter().enumerate() {
+        config_for(m, 1, args.max_depth, args.seed, args.window, sets_of(k))?;
     }
     let hdr = flip::HdrSettings::default();
 
     let mut results = Vec::new();
-    for m in &methods {
+    for (mk, m) in methods.iter().enumerate() {
         let mut levels: Vec<Level> = Vec::new();
         let mut reached: Vec<Option<Level>> = vec![None; targets.len()];
         let mut effort = args.start_effort;
         loop {
-            let mut renderer =
-                config_for(m, effort, args.max_depth, args.seed, args.window)?.build();
+            let (tech, settings) = config_for(
+                m,
+                effort,
+                args.max_depth,
+                args.seed,
+                args.window,
+                sets_of(mk),
+            )?;
+            let mut renderer = tech
+                .build(&settings, &BuildContext::default())
+                .map_err(anyhow::Error::msg)?;
             let builder =
                 FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
             let mut source = FrameSource::new(builder, args.fps, frames.clone());
-            let (t0, c0) = (Instant::now(), cpu_seconds());
-            let mut images = Vec::new();
-            for &f in &frames {
-                images.push(renderer.render_frame(&mut source, f, &|_| {}).pixels);
-            }
-            let wall_s = t0.elapsed().as_secs_f64();
-            let cpu_s = match (c0, cpu_seconds()) {
-                (Some(a), Some(b)) => b - a,
-                _ => f64::NAN,
-            };
+            let mut sink = MemorySink::new();
+            let run = chronolux_render::run::run(
+                renderer.as_mut(),
+                &mut source,
+                &frames,
+                &mut [&mut sink],
+                None,
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            let (wall_s, cpu_s) = (run.wall_s, run.cpu_s);
+            let images: Vec<Vec<chronolux_core::color::Rgb>> = sink
+                .frames
+                .into_iter()
+                .filter(|(f, ..)| measured.contains(f))
+                .map(|(_, img, _)| img.pixels)
+                .collect();
             let flips: Vec<f64> = images
                 .iter()
                 .zip(&refs)
@@ -335,9 +357,17 @@ pub fn run(args: QualityArgs) -> Result<()> {
                 .zip(&refs)
                 .map(|(i, r)| metrics::rel_mse(i, &r.pixels))
                 .collect();
-            let flicker = (images.len() > 1).then(|| {
-                let v: Vec<f64> = (1..images.len())
-                    .map(|k| {
+            // Flicker over pairs of measured frames that follow each other in the render.
+            let pairs: Vec<usize> = (1..measured.len())
+                .filter(|&k| {
+                    let p = frames.iter().position(|&f| f == measured[k - 1]);
+                    p.is_some_and(|p| frames.get(p + 1) == Some(&measured[k]))
+                })
+                .collect();
+            let flicker = (!pairs.is_empty()).then(|| {
+                let v: Vec<f64> = pairs
+                    .iter()
+                    .map(|&k| {
                         metrics::flicker(
                             &images[k - 1],
                             &images[k],
@@ -411,6 +441,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
         baseline: args.baseline.clone(),
         criterion: args.criterion.clone(),
         frames: frames.clone(),
+        measured: measured.clone(),
         target_flip: first,
         method_time_s,
         baseline_time_s,
@@ -457,12 +488,13 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 pub fn markdown(r: &QualityResult) -> String {
     let mut s = String::new();
     s += &format!(
-        "# Equal-quality benchmark: {}{}\n\nFrames {:?}, criterion: {} HDR-FLIP over frames.\n\n",
+        "# Equal-quality benchmark: {}{}\n\nFrames rendered {:?}, measured {:?}, criterion: {} HDR-FLIP over frames.\n\n",
         r.method,
         r.baseline
             .as_ref()
             .map_or(String::new(), |b| format!(" vs {b}")),
         r.frames,
+        r.measured,
         r.criterion
     );
     s += "| target FLIP |";

@@ -17,13 +17,14 @@
 //! (It is the same quantity as the peers' "relMSE of the reference's own noise".)
 //!
 //! ## Independence of the samples
-//! The camera-ray driver ([`chronolux_render::integrator::render_camera_rays`]) always
-//! starts at sample index 0 of the stream keyed by (seed, frame, pixel), so disjoint
-//! sample-index ranges of one stream are not reachable through the `Integrator` API.
-//! Instead every (half, round) pair gets its own seed, `hash(--seed, round, half)`: each
-//! seed is a different Owen scrambling of the Sobol sequence, i.e. an independent
+//! The frames are rendered by the registry's `path` technique as successive passes
+//! through the progressive run loop (`chronolux_render::run::run_progressive`,
+//! `FrameByFrame::render_passes`): pass 2r + h is round r of half h (even passes make A,
+//! odd ones B) and draws from its own seed, `batch_seed(--seed, round, half)`: each seed
+//! is a different Owen scrambling of the Sobol sequence, i.e. an independent
 //! randomisation, so batches are independent of each other (and stratified within a
-//! batch). A and B are therefore independent, as the estimate requires.
+//! batch). A and B are therefore independent, as the estimate requires. This sink stops a
+//! frame after a pair of passes whose estimate is at most the target.
 //!
 //! Output: `frame_NNNN.exr` (the average) + `.png`, the halves `frame_NNNN_A.exr` and
 //! `frame_NNNN_B.exr` (for noise floors), and `run.json`, whose per-frame `stats` record
@@ -33,18 +34,18 @@
 use crate::cli::SceneArgs;
 use crate::render::{last_frame, parse_frames, parse_resolution};
 use crate::scene_input;
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use chronolux_core::color::Rgb;
 use chronolux_core::metrics::REL_MSE_EPS;
-use chronolux_core::sampling::hash_words;
-use chronolux_core::scene::frame::{FrameBuilder, FrameScene};
+use chronolux_core::scene::frame::FrameBuilder;
+use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::{Image, write_exr};
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest, frame_stem};
-use chronolux_render::integrator::Integrator;
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_render::registry::{self, BuildContext};
+use chronolux_render::run;
+use chronolux_render::sequence::{Flow, Pass, PassPlan};
 use clap::Args;
 use std::sync::Arc;
-use std::time::Instant;
 
 #[derive(Args, Debug)]
 pub struct ReferenceArgs {
@@ -91,18 +92,6 @@ pub struct ReferenceArgs {
     pub resume: bool,
 }
 
-/// Result of one progressively rendered frame.
-pub struct Converged {
-    pub mean: Vec<Rgb>,
-    pub half_a: Vec<Rgb>,
-    pub half_b: Vec<Rgb>,
-    /// Total samples per pixel (both halves).
-    pub spp: u32,
-    pub rounds: u32,
-    pub error_estimate: f64,
-    pub rays: u64,
-}
-
 /// Estimated remaining relMSE of (A + B)/2: mean of ((A − B)/2)² / (M² + 0.01).
 pub fn half_error_estimate(a: &[Rgb], b: &[Rgb]) -> f64 {
     assert_eq!(a.len(), b.len());
@@ -121,64 +110,138 @@ pub fn half_error_estimate(a: &[Rgb], b: &[Rgb]) -> f64 {
     s / (3 * a.len()) as f64
 }
 
-/// Seed of the batch of `half` (0 = A, 1 = B) in `round`.
-pub fn batch_seed(seed: u64, round: u32, half: u32) -> u64 {
-    hash_words(&[seed, 0x7265_6665_7265_6e63, round as u64, half as u64])
+/// Accumulates the passes of a frame into the halves A (even passes) and B (odd passes)
+/// and stops the frame once the error estimate of their mean is at most the target.
+struct Converge {
+    target: f64,
+    sums: [Vec<Rgb>; 2],
+    n_half: [u32; 2],
+    rounds: u32,
+    estimate: f64,
+    rays: u64,
+    frame: u32,
 }
 
-/// Renders `frame` of `scene` progressively until the error estimate is ≤ `target` or
-/// `max_spp` is reached; `on_round(spp, estimate)` reports each round.
-pub fn render_converged(
-    scene: &FrameScene,
-    frame: u32,
-    settings: &PathSettings,
-    target: f64,
-    start_spp: u32,
-    max_spp: u32,
-    mut on_round: impl FnMut(u32, f64),
-) -> Converged {
-    let mut sums: [Vec<Rgb>; 2] = [Vec::new(), Vec::new()];
-    let mut n_half = 0u32;
-    let mut batch = (start_spp / 2).max(1);
-    let mut round = 0u32;
-    let mut rays = 0u64;
-    loop {
-        for (h, sum) in sums.iter_mut().enumerate() {
-            let pt = PathTracer::new(PathSettings {
-                spp: batch,
-                seed: batch_seed(settings.seed, round, h as u32),
-                ..settings.clone()
-            });
-            let out = pt.render(scene, frame, &|_| {});
-            rays += out.stats.rays + out.stats.shadow_rays;
-            if sum.is_empty() {
-                *sum = vec![Rgb::ZERO; out.pixels.len()];
-            }
-            for (s, p) in sum.iter_mut().zip(&out.pixels) {
-                *s += *p * batch as f32;
-            }
+impl Converge {
+    fn halves(&self) -> [Vec<Rgb>; 2] {
+        let half = |h: usize| {
+            let inv = 1.0 / self.n_half[h].max(1) as f32;
+            self.sums[h].iter().map(|s| *s * inv).collect()
+        };
+        [half(0), half(1)]
+    }
+}
+
+/// Writes the converged frames, their halves and run.json.
+struct ReferenceSink<'a> {
+    sink: &'a FrameSink,
+    manifest: Manifest,
+    resume: bool,
+    c: Converge,
+    w: u32,
+    h: u32,
+}
+
+impl run::FrameSink for ReferenceSink<'_> {
+    fn needs(&self, frame: u32) -> bool {
+        !(self.resume && self.sink.is_complete(frame) && self.manifest.frame(frame).is_some())
+    }
+
+    fn skipped(&mut self, frame: u32, _: usize, _: usize) {
+        eprintln!("frame {frame}: already complete, skipped (--resume)");
+    }
+
+    fn begin_frame(&mut self, frame: u32, _: usize, _: usize) {
+        self.c = Converge {
+            target: self.c.target,
+            sums: [Vec::new(), Vec::new()],
+            n_half: [0, 0],
+            rounds: 0,
+            estimate: f64::INFINITY,
+            rays: 0,
+            frame,
+        };
+    }
+
+    fn pass(&mut self, pass: &Pass) -> Flow {
+        let c = &mut self.c;
+        let h = (pass.index % 2) as usize;
+        let out = pass.image;
+        c.rays += out.stats.rays + out.stats.shadow_rays;
+        if c.sums[h].is_empty() {
+            c.sums[h] = vec![Rgb::ZERO; out.pixels.len()];
         }
-        n_half += batch;
-        round += 1;
-        let inv = 1.0 / n_half as f32;
-        let a: Vec<Rgb> = sums[0].iter().map(|s| *s * inv).collect();
-        let b: Vec<Rgb> = sums[1].iter().map(|s| *s * inv).collect();
-        let est = half_error_estimate(&a, &b);
-        on_round(2 * n_half, est);
-        let room = (max_spp / 2).saturating_sub(n_half);
-        if est <= target || room == 0 {
-            let mean = a.iter().zip(&b).map(|(x, y)| (*x + *y) * 0.5).collect();
-            return Converged {
-                mean,
-                half_a: a,
-                half_b: b,
-                spp: 2 * n_half,
-                rounds: round,
-                error_estimate: est,
-                rays,
-            };
+        for (s, p) in c.sums[h].iter_mut().zip(&out.pixels) {
+            *s += *p * pass.spp as f32;
         }
-        batch = n_half.min(room);
+        c.n_half[h] += pass.spp;
+        if h == 0 {
+            return Flow::Continue;
+        }
+        c.rounds += 1;
+        let [a, b] = c.halves();
+        c.estimate = half_error_estimate(&a, &b);
+        eprintln!(
+            "frame {}: {:>7} spp, estimated relMSE {:.3e}",
+            c.frame, pass.total_spp, c.estimate
+        );
+        if c.estimate <= c.target {
+            Flow::Stop
+        } else {
+            Flow::Continue
+        }
+    }
+
+    fn frame(&mut self, f: &run::FinishedFrame) -> Result<(), run::SinkError> {
+        let c = &self.c;
+        let [a, b] = c.halves();
+        let mean: Vec<Rgb> = a.iter().zip(&b).map(|(x, y)| (*x + *y) * 0.5).collect();
+        let img = |p: Vec<Rgb>| Image::from_pixels(self.w, self.h, p);
+        self.sink
+            .write_frame(f.frame, &img(mean), 0.0)
+            .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+        for (suffix, half) in [("A", a), ("B", b)] {
+            let p = self
+                .sink
+                .dir()
+                .join(format!("{}_{suffix}.exr", frame_stem(f.frame)));
+            write_exr(&p, &img(half)).map_err(|e| format!("writing {}: {e}", p.display()))?;
+        }
+        let converged = c.estimate <= c.target;
+        let spp = c.n_half[0] + c.n_half[1];
+        self.manifest.upsert_frame(FrameRecord::new(
+            f.frame,
+            f.time_s,
+            f.wall_s,
+            serde_json::json!({
+                "spp": spp,
+                "rounds": c.rounds,
+                "error_estimate": c.estimate,
+                "target_error": c.target,
+                "converged": converged,
+                "rays": c.rays,
+            }),
+        ));
+        self.sink.write_manifest(&self.manifest)?;
+        eprintln!(
+            "frame {}: {} spp, estimated relMSE {:.3e}{} in {:.1} s",
+            f.frame,
+            spp,
+            c.estimate,
+            if converged {
+                ""
+            } else {
+                " (NOT converged: --max-spp reached)"
+            },
+            f.wall_s
+        );
+        Ok(())
+    }
+
+    fn finish(&mut self, summary: &run::RunSummary) -> Result<(), run::SinkError> {
+        self.manifest.finish(summary.wall_s);
+        self.sink.write_manifest(&self.manifest)?;
+        Ok(())
     }
 }
 
@@ -213,17 +276,25 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         None => crate::render::default_resolution(&input.desc, &input.camera),
     };
     let sink = FrameSink::create(&args.output)?;
-    let settings = PathSettings {
-        spp: args.start_spp,
-        max_depth: args.max_depth,
-        rr_depth: 5,
-        seed: args.seed,
-    };
+    // The path tracer of the registry, in passes of the paired-doubling schedule
+    // (`FrameByFrame::render_passes`): pass 2r + h is round r of half h, with its own seed.
+    let tech = registry::find("path").map_err(anyhow::Error::msg)?;
+    let mut technique =
+        serde_json::json!({"spp": args.start_spp, "rr_depth": 5, "seed": args.seed});
+    if let Some(d) = args.max_depth {
+        technique["max_depth"] = d.into();
+    }
+    let technique = registry::resolve(tech, Some(&technique), &[]).map_err(anyhow::Error::msg)?;
+    let mut renderer = tech
+        .build(&technique, &BuildContext::default())
+        .map_err(anyhow::Error::msg)?;
     let desc = Arc::new(input.desc);
-    let mut builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+    let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+    let mut source = FrameSource::new(builder, args.fps, frames.clone());
     let run_settings = serde_json::json!({
         "kind": "reference",
-        "technique": {"method": "path", "max_depth": args.max_depth, "rr_depth": 5, "seed": args.seed},
+        "method": "path",
+        "technique": technique,
         "target_error": args.target_error,
         "error_estimate": "mean ((A - B)/2)^2 / (M^2 + 0.01) of two independent halves A, B; M = (A + B)/2",
         "start_spp": args.start_spp,
@@ -252,66 +323,41 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
         args.max_spp,
         args.output.display()
     );
-    let total = Instant::now();
-    for &f in &frames {
-        if args.resume && sink.is_complete(f) && manifest.frame(f).is_some() {
-            eprintln!("frame {f}: already complete, skipped (--resume)");
-            continue;
-        }
-        let t = f as f32 / args.fps;
-        let start = Instant::now();
-        let scene = builder.build(t);
-        let c = render_converged(
-            &scene,
-            f,
-            &settings,
-            args.target_error,
-            args.start_spp,
-            args.max_spp,
-            |spp, est| eprintln!("frame {f}: {spp:>7} spp, estimated relMSE {est:.3e}"),
-        );
-        let img = |p: Vec<Rgb>| Image::from_pixels(w, h, p);
-        sink.write_frame(f, &img(c.mean), 0.0)
-            .with_context(|| format!("writing frame {f}"))?;
-        for (suffix, half) in [("A", c.half_a), ("B", c.half_b)] {
-            let p = sink.dir().join(format!("{}_{suffix}.exr", frame_stem(f)));
-            write_exr(&p, &img(half)).with_context(|| format!("writing {}", p.display()))?;
-        }
-        let converged = c.error_estimate <= args.target_error;
-        let wall = start.elapsed().as_secs_f64();
-        manifest.upsert_frame(FrameRecord::new(
-            f,
-            t,
-            wall,
-            serde_json::json!({
-                "spp": c.spp,
-                "rounds": c.rounds,
-                "error_estimate": c.error_estimate,
-                "target_error": args.target_error,
-                "converged": converged,
-                "rays": c.rays,
-            }),
-        ));
-        sink.write_manifest(&manifest)?;
-        eprintln!(
-            "frame {f}: {} spp, estimated relMSE {:.3e}{} in {wall:.1} s",
-            c.spp,
-            c.error_estimate,
-            if converged {
-                ""
-            } else {
-                " (NOT converged: --max-spp reached)"
-            }
-        );
-    }
-    manifest.finish(total.elapsed().as_secs_f64());
-    sink.write_manifest(&manifest)?;
+    let mut out = ReferenceSink {
+        sink: &sink,
+        manifest,
+        resume: args.resume,
+        c: Converge {
+            target: args.target_error,
+            sums: [Vec::new(), Vec::new()],
+            n_half: [0, 0],
+            rounds: 0,
+            estimate: f64::INFINITY,
+            rays: 0,
+            frame: 0,
+        },
+        w,
+        h,
+    };
+    run::run_progressive(
+        renderer.as_mut(),
+        &mut source,
+        &frames,
+        PassPlan {
+            first_spp: args.start_spp,
+            max_spp: args.max_spp,
+        },
+        &mut [&mut out],
+        None,
+    )
+    .map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use chronolux_render::sequence::batch_seed;
 
     #[test]
     fn estimate_of_identical_halves_is_zero_and_of_known_halves_is_computed() {

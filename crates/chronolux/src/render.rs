@@ -1,6 +1,7 @@
 //! `chronolux render`: load → frame builder → technique → frames on disk.
 
-use crate::cli::RenderArgs;
+use crate::cli::{RenderArgs, SceneArgs};
+use crate::config::{ConfigFile, FlagSetting, RunConfig, parse_sets, technique_settings};
 use crate::info;
 use crate::scene_input;
 use anyhow::{Context, Result, bail};
@@ -9,12 +10,10 @@ use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
 use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::Image;
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
-use chronolux_render::dept::budget::PhotonCount;
-use chronolux_render::pt::PathSettings;
-use chronolux_render::registry::TechniqueConfig;
+use chronolux_render::registry::{self, BuildContext};
+use chronolux_render::run;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::sync::Arc;
-use std::time::Instant;
 
 /// Largest accepted image side and sample count: beyond these a render is almost surely
 /// a typo (and would need more memory or time than any machine of ours has).
@@ -108,31 +107,105 @@ pub fn default_resolution(desc: &SceneDesc, camera: &CameraChoice) -> (u32, u32)
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
-    if args.spp == 0 || args.spp > MAX_SPP {
-        bail!("--spp {} out of range (1 to {MAX_SPP})", args.spp);
+    if args.plan.is_some() || args.segment.is_some() {
+        return crate::farm::render_segment(args);
     }
-    check_fps_and_depth(args.fps, args.max_depth)?;
-    if !args.exposure.is_finite() {
+    let (config, input) = resolve(&args)?;
+    execute(
+        &config,
+        input,
+        &Exec {
+            output: args.output.clone(),
+            resume: args.resume,
+            no_preview: args.no_preview,
+            threads: args.threads,
+            segment: None,
+        },
+    )
+}
+
+/// How to carry out a resolved configuration (nothing here changes the pixels).
+pub struct Exec {
+    pub output: std::path::PathBuf,
+    pub resume: bool,
+    pub no_preview: bool,
+    pub threads: Option<usize>,
+    /// A farm segment: only its own frames are written, with its own manifest.
+    pub segment: Option<crate::farm::SegmentRun>,
+}
+
+/// The configuration the flags (and `--config`) give, checked, and the scene loaded.
+pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)> {
+    // Everything that can be checked without the scene is checked before loading it.
+    let file = args.config.as_deref().map(ConfigFile::read).transpose()?;
+    let prev = file.as_ref().map(ConfigFile::run).unwrap_or_default();
+    let method = args
+        .method
+        .clone()
+        .or_else(|| prev.method.clone())
+        .unwrap_or_else(|| "path".into());
+    let tech = registry::find(&method).map_err(anyhow::Error::msg)?;
+    // A config file's technique settings apply to its own method only.
+    let base = match &file {
+        Some(ConfigFile::Settings(v)) => Some(v.clone()),
+        Some(f) if f.method() == Some(method.as_str()) => prev.technique.clone(),
+        Some(f) => {
+            log::warn!(
+                "--config names --method {}, overridden by --method {method}: its technique settings are not used",
+                f.method().unwrap_or("?")
+            );
+            None
+        }
+        None => None,
+    };
+    if let Some(spp) = args.spp
+        && (spp == 0 || spp > MAX_SPP)
+    {
+        bail!("--spp {spp} out of range (1 to {MAX_SPP})");
+    }
+    let fps = args.fps.or(prev.fps).unwrap_or(24.0);
+    check_fps_and_depth(fps, args.max_depth)?;
+    let exposure = args.exposure.or(prev.exposure).unwrap_or(0.0);
+    if !exposure.is_finite() {
         bail!("--exposure must be a finite number of stops");
     }
-    chronolux_render::motion_blur::check_shutter(args.shutter).map_err(anyhow::Error::msg)?;
-    if args.shutter > 0.0 && !["path", "bdpt", "stbpt"].contains(&args.method.as_str()) {
-        bail!(
-            "--shutter (motion blur) is implemented for --method path, bdpt and stbpt, not {}",
-            args.method
-        );
-    }
-    set_threads(args.threads)?;
-    // Everything that can be checked without the scene is checked before loading it.
-    let requested_frames = args.frames.as_deref().map(parse_frames).transpose()?;
-    let requested_resolution = args
-        .resolution
-        .as_deref()
-        .map(parse_resolution)
-        .transpose()?;
-    let input = scene_input::load(&args.scene)?;
-    let summary = info::summarize(&input);
-    let last = last_frame(&input.desc, input.animation, args.fps);
+    let shutter = args.shutter.or(prev.shutter).unwrap_or(0.0);
+    chronolux_render::motion_blur::check_shutter(shutter).map_err(anyhow::Error::msg)?;
+    let mut flags = Vec::new();
+    let mut flag = |flag: &'static str, key: &'static str, value: Option<serde_json::Value>| {
+        if let Some(value) = value {
+            flags.push(FlagSetting { flag, key, value });
+        }
+    };
+    flag("--spp", "spp", args.spp.map(Into::into));
+    flag("--seed", "seed", args.seed.map(Into::into));
+    flag("--max-depth", "max_depth", args.max_depth.map(Into::into));
+    flag("--window", "window", args.window.map(Into::into));
+    let sets = parse_sets(&args.set)?;
+    let settings = technique_settings(tech, base.as_ref(), &flags, args.photons.as_deref(), &sets)?;
+    // Built once here so that a bad combination fails before the scene is loaded.
+    tech.build(&settings, &BuildContext { shutter })
+        .map_err(anyhow::Error::msg)?;
+    let requested_frames = match args.frames.as_deref() {
+        Some(f) => Some(parse_frames(f)?),
+        None => prev.frames.clone(),
+    };
+    let requested_resolution = match args.resolution.as_deref() {
+        Some(r) => Some(parse_resolution(r)?),
+        None => prev.resolution.map(|[w, h]| (w, h)),
+    };
+    let scene_args = SceneArgs {
+        scene: args
+            .scene
+            .scene
+            .clone()
+            .or_else(|| prev.scene.clone().map(Into::into)),
+        animation: args.scene.animation.clone().or(prev.animation.clone()),
+        camera: args.scene.camera.clone().or(prev.camera.clone()),
+        stage: args.scene.stage.clone().or(prev.stage.clone()),
+    };
+    let input = scene_input::load(&scene_args)?;
+    let last = last_frame(&input.desc, input.animation, fps);
     let frames = match requested_frames {
         Some(f) => f,
         None => (0..=last.unwrap_or(0)).collect(),
@@ -142,8 +215,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
         if max > last {
             bail!(
                 "--frames goes to frame {max}, but the animation ends at frame {last} ({:.3} s at {} fps)",
-                last as f32 / args.fps,
-                args.fps
+                last as f32 / fps,
+                fps
             );
         }
     }
@@ -157,238 +230,294 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let (w, h) = match requested_resolution {
         Some(r) => r,
         // The built-in demo is meant to finish in a few minutes on a laptop: 256² by default.
-        None if args.scene.scene.is_none() => (256, 256),
+        None if scene_args.scene.is_none() => (256, 256),
         None => default_resolution(&input.desc, &input.camera),
     };
-    let photons: Option<PhotonCount> = match &args.photons {
-        None => None,
-        Some(_) if !args.method.contains("dept") => {
-            bail!("--photons applies to the photon methods (dept*, spacetime-dept) only")
-        }
-        Some(p) => Some(p.parse().map_err(anyhow::Error::msg)?),
-    };
-    if args.window.is_some() && args.method != "stbpt" {
-        bail!("--window applies to --method stbpt only");
-    }
-    let sink = FrameSink::create(&args.output)?;
-    let config = match args.method.as_str() {
-        "path" => TechniqueConfig::Path(PathSettings {
-            spp: args.spp,
-            max_depth: args.max_depth,
-            rr_depth: 5,
-            seed: args.seed,
+    let config = RunConfig {
+        method: method.clone(),
+        technique: settings,
+        scene: scene_args.scene.as_ref().map(|p| p.display().to_string()),
+        stage: scene_args.stage.clone(),
+        animation: input.animation.map(|a| {
+            let name = &input.desc.animations[a.index()].name;
+            if name.trim().is_empty() {
+                a.index().to_string()
+            } else {
+                name.clone()
+            }
         }),
-        "bdpt" => TechniqueConfig::Bdpt(chronolux_render::bdpt::BdptSettings {
-            spp: args.spp,
-            max_depth: args.max_depth,
-            seed: args.seed,
-            ..Default::default()
-        }),
-        "stbpt" => TechniqueConfig::Stbpt(chronolux_render::temporal::stbpt::StbptSettings {
-            bdpt: chronolux_render::bdpt::BdptSettings {
-                spp: args.spp,
-                max_depth: args.max_depth,
-                seed: args.seed,
-                ..Default::default()
-            },
-            window: args.window.unwrap_or(4),
-            shutter: args.shutter,
-            ..Default::default()
-        }),
-        "dept" => TechniqueConfig::Dept(
-            chronolux_render::dept::DeptSettings {
-                spp: args.spp,
-                seed: args.seed,
-                ..Default::default()
-            }
-            .with_photons(photons),
-        ),
-        "dept-spatial" => TechniqueConfig::DeptSpatial(
-            chronolux_render::dept::DeptSettings {
-                spp: args.spp,
-                seed: args.seed,
-                ..chronolux_render::dept::DeptSettings::spatial()
-            }
-            .with_photons(photons),
-        ),
-        "dept-bilateral" => TechniqueConfig::DeptBilateral(
-            chronolux_render::dept::DeptSettings {
-                spp: args.spp,
-                seed: args.seed,
-                ..chronolux_render::dept::DeptSettings::bilateral()
-            }
-            .with_photons(photons),
-        ),
-        "spacetime-dept" => TechniqueConfig::SpacetimeDept(
-            chronolux_render::temporal::spacetime_dept::SpacetimeSettings {
-                spp: args.spp,
-                seed: args.seed,
-                ..Default::default()
-            }
-            .with_photons(photons),
-        ),
-        m => bail!("unknown --method '{m}'"),
-    };
-    let mut renderer: Box<dyn chronolux_render::sequence::SequenceRenderer + Send> = match &config {
-        TechniqueConfig::Path(s) if args.shutter > 0.0 => {
-            Box::new(chronolux_render::motion_blur::MotionBlur::new(
-                chronolux_render::pt::PathTracer::new(s.clone()),
-                args.shutter,
-            ))
-        }
-        TechniqueConfig::Bdpt(s) if args.shutter > 0.0 => {
-            Box::new(chronolux_render::motion_blur::MotionBlur::new(
-                chronolux_render::bdpt::Bdpt::new(s.clone()),
-                args.shutter,
-            ))
-        }
-        _ => config.build(),
-    };
-    let desc = Arc::new(input.desc);
-    let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
-    let mut source = FrameSource::new(builder, args.fps, frames.clone());
-
-    let settings = serde_json::json!({
-        "technique": config,
-        "resolution": [w, h],
-        "fps": args.fps,
-        "shutter": args.shutter,
-        "frames": frames,
-        "exposure": args.exposure,
-        "threads": rayon::current_num_threads(),
-        "animation": input.animation.map(|a| desc.animations[a.index()].name.clone()),
-        "camera": match &input.camera {
+        camera: match &input.camera {
             CameraChoice::First => None,
             CameraChoice::Named(n) => Some(n.clone()),
         },
-        "stage": args.scene.stage,
-        "scene": input.source,
-    });
+        resolution: [w, h],
+        fps,
+        frames: frames.clone(),
+        shutter,
+        exposure,
+    };
+    Ok((config, input))
+}
+
+/// Renders `config` (its scene already loaded as `input`) into `exec.output`.
+pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) -> Result<()> {
+    let tech = registry::find(&config.method).map_err(anyhow::Error::msg)?;
+    let mut renderer = tech
+        .build(
+            &config.technique,
+            &BuildContext {
+                shutter: config.shutter,
+            },
+        )
+        .map_err(anyhow::Error::msg)?;
+    set_threads(exec.threads)?;
+    let summary = info::summarize(&input);
+    let [w, h] = config.resolution;
+    let fps = config.fps;
+    // A segment computes its warm-up and cool-down frames too, and writes only its own.
+    let (source_frames, run_frames) = match &exec.segment {
+        Some(seg) => (seg.compute.clone(), seg.run_frames()),
+        None => (config.frames.clone(), config.frames.clone()),
+    };
+    let frames = run_frames;
+    let mut sink = FrameSink::create(&exec.output)?;
+    if let Some(seg) = &exec.segment {
+        sink = sink.with_manifest_name(&seg.manifest_name());
+    }
+    let desc = Arc::new(input.desc);
+    let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
+    let mut source = FrameSource::new(builder, fps, source_frames);
+
+    let mut settings_json = serde_json::to_value(config)?;
+    settings_json["threads"] = rayon::current_num_threads().into();
     let mut manifest = Manifest::new(
         std::env::args().collect(),
-        settings,
+        settings_json,
         serde_json::to_value(&summary)?,
     );
-    if args.resume
+    if let Some(seg) = &exec.segment {
+        settings_json_segment(&mut manifest.settings, seg);
+    }
+    if exec.resume
         && let Some(earlier) = sink.read_manifest()?
     {
-        check_resumable(&earlier.settings, &manifest.settings, &args.output)?;
+        check_resumable(&earlier.settings, &manifest.settings, &exec.output)?;
         manifest.merge_earlier(&earlier);
     }
 
-    // Progress bars only on a terminal; otherwise (logs, CI, tests) one line per frame.
-    let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let mp = MultiProgress::with_draw_target(if interactive {
-        ProgressDrawTarget::stderr()
-    } else {
-        ProgressDrawTarget::hidden()
-    });
-    let style = ProgressStyle::with_template("{prefix:>7} [{bar:40}] {pos}/{len} {msg} ETA {eta}")
-        .expect("valid progress template")
-        .progress_chars("=> ");
-    let frame_bar = mp.add(ProgressBar::new(frames.len() as u64));
-    frame_bar.set_style(style.clone());
-    frame_bar.set_prefix("frames");
-    let pixel_bar = mp.add(ProgressBar::new(u64::from(w) * u64::from(h)));
-    pixel_bar.set_style(style);
-    pixel_bar.set_prefix("pixels");
-    let say = |s: String| {
-        if interactive {
-            // Prints above the bars; falls back to plain stderr if that fails.
-            if mp.println(&s).is_err() {
+    let progress = Progress::new(w, h, frames.len());
+    progress.say(format!(
+        "rendering {} frame(s) of {} at {w}x{h}, method {}, {} thread(s) into {}",
+        frames.len(),
+        input.source,
+        renderer.name(),
+        rayon::current_num_threads(),
+        exec.output.display()
+    ));
+    let mut disk = DiskSink {
+        sink: &sink,
+        manifest,
+        exposure: config.exposure,
+        resume: exec.resume,
+        owned: exec.segment.as_ref().map(|s| s.owned.clone()),
+        warm_up_until: exec
+            .segment
+            .as_ref()
+            .and_then(|s| s.warm_up_until(&sink, exec.resume)),
+    };
+    let mut progress = progress;
+    let result = chronolux_render::run::run(
+        renderer.as_mut(),
+        &mut source,
+        &frames,
+        &mut [&mut disk, &mut progress],
+        None,
+    );
+    // The bars are cleared whatever happens, so that an error line is not drawn over.
+    progress.clear();
+    let summary = result.map_err(|e| anyhow::anyhow!("{e}"))?;
+    let mut written: Vec<u32> = frames
+        .iter()
+        .copied()
+        .filter(|f| summary.rendered.contains(f) || summary.skipped.contains(f))
+        .collect();
+    written.dedup();
+    let written: Vec<u32> = match &exec.segment {
+        Some(seg) => written
+            .into_iter()
+            .filter(|f| seg.owned.contains(f))
+            .collect(),
+        None => written,
+    };
+    // A segment's frames are previewed when the farm's frames are assembled.
+    if !exec.no_preview && exec.segment.is_none() && written.len() > 1 {
+        match chronolux_io::output::write_preview(&exec.output, &written, fps) {
+            Ok(p) => progress.say(format!("preview: {}", p.display())),
+            Err(e) => eprintln!("warning: no preview written: {e}"),
+        }
+    }
+    progress.say(format!(
+        "done: {} frame(s) in {:.1} s → {}",
+        written.len(),
+        summary.wall_s,
+        exec.output.display()
+    ));
+    Ok(())
+}
+
+/// Writes finished frames (EXR + PNG) and keeps `run.json` current after each.
+pub struct DiskSink<'a> {
+    pub sink: &'a FrameSink,
+    pub manifest: Manifest,
+    pub exposure: f32,
+    /// Frames already complete in the folder are not needed again.
+    pub resume: bool,
+    /// A farm segment's own frames (the others are computed, not written).
+    pub owned: Option<Vec<u32>>,
+    /// A stateful technique's segment renders (without writing) every frame before this
+    /// one: its history.
+    pub warm_up_until: Option<u32>,
+}
+
+impl run::FrameSink for DiskSink<'_> {
+    fn needs(&self, frame: u32) -> bool {
+        let own = self.owned.as_ref().is_none_or(|o| o.contains(&frame));
+        if !own {
+            return self.warm_up_until.is_some_and(|u| frame < u);
+        }
+        !(self.resume && self.sink.is_complete(frame))
+    }
+
+    fn frame(&mut self, f: &run::FinishedFrame) -> Result<(), run::SinkError> {
+        if self.owned.as_ref().is_some_and(|o| !o.contains(&f.frame)) {
+            return Ok(()); // a warm-up frame: computed for its history only
+        }
+        let out = f.output;
+        let image = Image {
+            width: out.width,
+            height: out.height,
+            pixels: out.pixels.clone(),
+        };
+        self.sink
+            .write_frame(f.frame, &image, self.exposure)
+            .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+        self.manifest
+            .upsert_frame(FrameRecord::new(f.frame, f.time_s, f.wall_s, f.record()));
+        self.sink.write_manifest(&self.manifest)?;
+        Ok(())
+    }
+
+    fn finish(&mut self, summary: &run::RunSummary) -> Result<(), run::SinkError> {
+        self.manifest.finish(summary.wall_s);
+        self.sink.write_manifest(&self.manifest)?;
+        Ok(())
+    }
+}
+
+/// Progress on the terminal: bars of frames and of the current frame's pixels when
+/// stderr is a terminal, one line per frame otherwise (logs, CI, tests).
+pub struct Progress {
+    interactive: bool,
+    mp: MultiProgress,
+    frames: ProgressBar,
+    pixels: ProgressBar,
+}
+
+impl Progress {
+    pub fn new(w: u32, h: u32, n: usize) -> Self {
+        let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
+        let mp = MultiProgress::with_draw_target(if interactive {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        });
+        let style =
+            ProgressStyle::with_template("{prefix:>7} [{bar:40}] {pos}/{len} {msg} ETA {eta}")
+                .expect("valid progress template")
+                .progress_chars("=> ");
+        let frames = mp.add(ProgressBar::new(n as u64));
+        frames.set_style(style.clone());
+        frames.set_prefix("frames");
+        let pixels = mp.add(ProgressBar::new(u64::from(w) * u64::from(h)));
+        pixels.set_style(style);
+        pixels.set_prefix("pixels");
+        Progress {
+            interactive,
+            mp,
+            frames,
+            pixels,
+        }
+    }
+
+    /// A line above the bars (plain stderr when not on a terminal).
+    pub fn say(&self, s: String) {
+        if self.interactive {
+            if self.mp.println(&s).is_err() {
                 eprintln!("{s}");
             }
         } else {
             eprintln!("{s}");
         }
-    };
-
-    say(format!(
-        "rendering {} frame(s) of {} at {w}x{h}, {} spp, method {}, {} thread(s) into {}",
-        frames.len(),
-        input.source,
-        args.spp,
-        renderer.name(),
-        rayon::current_num_threads(),
-        args.output.display()
-    ));
-    let total = Instant::now();
-    let mut rendered_frames = Vec::new();
-    let n = frames.len();
-    let width = n.to_string().len();
-    // The bars are cleared whatever happens, so that an error line is not drawn over.
-    let result = (|| -> Result<()> {
-        for (k, &f) in frames.iter().enumerate() {
-            if args.resume && sink.is_complete(f) {
-                say(format!(
-                    "frame {f} [{:>width$}/{n}]: already complete, skipped (--resume)",
-                    k + 1
-                ));
-                frame_bar.inc(1);
-                rendered_frames.push(f);
-                continue;
-            }
-            let t = f as f32 / args.fps;
-            let start = Instant::now();
-            pixel_bar.reset();
-            let out = renderer.render_frame(&mut source, f, &|n| pixel_bar.inc(n));
-            let image = Image {
-                width: out.width,
-                height: out.height,
-                pixels: out.pixels,
-            };
-            sink.write_frame(f, &image, args.exposure)
-                .with_context(|| format!("writing frame {f}"))?;
-            let wall = start.elapsed().as_secs_f64();
-            let rec = FrameRecord::new(
-                f,
-                t,
-                wall,
-                serde_json::json!({
-                    "rays": out.stats.rays,
-                    "shadow_rays": out.stats.shadow_rays,
-                    "samples": out.stats.samples,
-                    "invalid_samples": out.invalid_samples,
-                    "photons": renderer.photons_last_frame(),
-                    "reuse": renderer.reuse_last_frame(),
-                    "build": source.last_build,
-                }),
-            );
-            manifest.upsert_frame(rec);
-            sink.write_manifest(&manifest)?;
-            frame_bar.inc(1);
-            say(format!(
-                "frame {f} [{:>width$}/{n}] t={t:.3} s: {wall:.2} s, {:.2} Mrays/s{}",
-                k + 1,
-                (out.stats.rays + out.stats.shadow_rays) as f64 / wall.max(1e-9) / 1e6,
-                if out.invalid_samples > 0 {
-                    format!(", {} NaN/Inf samples dropped", out.invalid_samples)
-                } else {
-                    String::new()
-                }
-            ));
-            rendered_frames.push(f);
-        }
-        Ok(())
-    })();
-    pixel_bar.finish_and_clear();
-    frame_bar.finish_and_clear();
-    result?;
-    manifest.finish(total.elapsed().as_secs_f64());
-    sink.write_manifest(&manifest)?;
-    if !args.no_preview && rendered_frames.len() > 1 {
-        match chronolux_io::output::write_preview(&args.output, &rendered_frames, args.fps) {
-            Ok(p) => say(format!("preview: {}", p.display())),
-            Err(e) => eprintln!("warning: no preview written: {e}"),
-        }
     }
-    say(format!(
-        "done: {} frame(s) in {:.1} s → {}",
-        rendered_frames.len(),
-        total.elapsed().as_secs_f64(),
-        args.output.display()
-    ));
-    Ok(())
+
+    pub fn clear(&self) {
+        self.pixels.finish_and_clear();
+        self.frames.finish_and_clear();
+    }
+}
+
+impl run::FrameSink for Progress {
+    /// Progress reporting wants no frame of its own: the writers decide what is rendered.
+    fn needs(&self, _: u32) -> bool {
+        false
+    }
+
+    fn begin_frame(&mut self, _: u32, _: usize, _: usize) {
+        self.pixels.reset();
+    }
+
+    fn pixels(&self, n: u64) {
+        self.pixels.inc(n);
+    }
+
+    fn skipped(&mut self, frame: u32, k: usize, n: usize) {
+        let width = n.to_string().len();
+        self.say(format!(
+            "frame {frame} [{:>width$}/{n}]: already complete, skipped (--resume)",
+            k + 1
+        ));
+        self.frames.inc(1);
+    }
+
+    fn frame(&mut self, f: &run::FinishedFrame) -> Result<(), run::SinkError> {
+        let out = f.output;
+        let width = f.n.to_string().len();
+        self.frames.inc(1);
+        self.say(format!(
+            "frame {} [{:>width$}/{}] t={:.3} s: {:.2} s, {:.2} Mrays/s{}",
+            f.frame,
+            f.k + 1,
+            f.n,
+            f.time_s,
+            f.wall_s,
+            (out.stats.rays + out.stats.shadow_rays) as f64 / f.wall_s.max(1e-9) / 1e6,
+            if out.invalid_samples > 0 {
+                format!(", {} NaN/Inf samples dropped", out.invalid_samples)
+            } else {
+                String::new()
+            }
+        ));
+        Ok(())
+    }
+}
+
+/// Records in a segment's manifest which segment it is.
+fn settings_json_segment(settings: &mut serde_json::Value, seg: &crate::farm::SegmentRun) {
+    settings["segment"] = serde_json::json!({
+        "index": seg.index,
+        "owned": seg.owned,
+        "compute": seg.compute,
+    });
 }
 
 /// `--resume` continues a run only with the settings that made its frames: mixing frames of
@@ -399,6 +528,7 @@ fn check_resumable(
     dir: &std::path::Path,
 ) -> Result<()> {
     let keys = [
+        "method",
         "technique",
         "resolution",
         "fps",

@@ -46,7 +46,7 @@ pub enum MisHeuristic {
 
 /// Bidirectional path tracer settings.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 pub struct BdptSettings {
     /// Samples per pixel (each one camera and one light subpath). Default 64.
     pub spp: u32,
@@ -403,4 +403,44 @@ impl Integrator for Bdpt {
             progress,
         )
     }
+
+    fn batch(&self, spp: u32, round: u32, half: u32) -> Option<Box<dyn Integrator + Send>> {
+        Some(Box::new(Bdpt::new(BdptSettings {
+            spp,
+            seed: crate::sequence::batch_seed(self.settings.seed, round, half),
+            ..self.settings.clone()
+        })))
+    }
 }
+
+/// Registry entry of `bdpt`; with a shutter, time-sampled motion blur
+/// ([`crate::motion_blur::MotionBlur`]).
+pub static TECHNIQUE: crate::registry::Preset<BdptSettings> = crate::registry::Preset {
+    name: "bdpt",
+    summary: "bidirectional path tracing, all strategies with MIS, frame by frame",
+    capabilities: crate::registry::Capabilities {
+        motion_blur: true,
+        photons: false,
+        window: false,
+        stateless: true,
+        effort: crate::registry::Effort {
+            key: "spp",
+            per_unit: 1,
+            unit: "samples per pixel",
+        },
+    },
+    defaults: BdptSettings::default,
+    build: |s, ctx, name| {
+        if ctx.shutter > 0.0 {
+            Box::new(crate::motion_blur::MotionBlur::new(
+                Bdpt::new(s),
+                ctx.shutter,
+            ))
+        } else {
+            Box::new(crate::sequence::FrameByFrame {
+                integrator: Bdpt::new(s),
+                name,
+            })
+        }
+    },
+};

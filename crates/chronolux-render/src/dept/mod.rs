@@ -244,20 +244,15 @@ pub fn render_view(
     render_camera_rays(&view, scene, frame, settings.spp, settings.seed, progress)
 }
 
-/// Frame-by-frame DEPT as a sequence renderer that also reports each frame's photons.
+/// Frame-by-frame DEPT as a sequence renderer; each frame's report has its `photons`.
 pub struct DeptSequence {
     pub dept: Dept,
     pub name: &'static str,
-    last_photons: Option<u64>,
 }
 
 impl DeptSequence {
     pub fn new(dept: Dept, name: &'static str) -> Self {
-        DeptSequence {
-            dept,
-            name,
-            last_photons: None,
-        }
+        DeptSequence { dept, name }
     }
 }
 
@@ -275,12 +270,10 @@ impl crate::sequence::SequenceRenderer for DeptSequence {
         let scene = source.frame(frame);
         let scene = &*scene;
         let solved = self.dept.solve(scene, frame);
-        self.last_photons = Some(solved.photons.photons());
-        self.dept.render_solved(scene, frame, &solved, progress)
-    }
-
-    fn photons_last_frame(&self) -> Option<u64> {
-        self.last_photons
+        let mut out = self.dept.render_solved(scene, frame, &solved, progress);
+        out.report
+            .insert("photons".into(), solved.photons.photons().into());
+        out
     }
 }
 
@@ -295,3 +288,52 @@ impl Integrator for Dept {
         self.render_solved(scene, frame, &solved, progress)
     }
 }
+
+/// What the three `dept` presets share: photons (effort in thousands per frame), frame by
+/// frame.
+const DEPT_CAPABILITIES: crate::registry::Capabilities = crate::registry::Capabilities {
+    motion_blur: false,
+    photons: true,
+    window: false,
+    stateless: true,
+    effort: crate::registry::Effort {
+        key: "photons",
+        per_unit: 1000,
+        unit: "thousand photons per frame",
+    },
+};
+
+fn build_dept(
+    s: DeptSettings,
+    _: &crate::registry::BuildContext,
+    name: &'static str,
+) -> crate::registry::Renderer {
+    Box::new(DeptSequence::new(Dept::new(s), name))
+}
+
+/// Registry entry of `dept` (no filtering).
+pub static TECHNIQUE: crate::registry::Preset<DeptSettings> = crate::registry::Preset {
+    name: "dept",
+    summary: "photon density estimation on mesh elements, frame by frame, no filtering",
+    capabilities: DEPT_CAPABILITIES,
+    defaults: DeptSettings::default,
+    build: build_dept,
+};
+
+/// `dept-spatial`: `dept` with its spatial Gaussian filter ([`DeptSettings::spatial`]).
+pub static SPATIAL: crate::registry::Preset<DeptSettings> = crate::registry::Preset {
+    name: "dept-spatial",
+    summary: "photon density estimation on mesh elements, spatial Gaussian filter (a preset of dept)",
+    capabilities: DEPT_CAPABILITIES,
+    defaults: DeptSettings::spatial,
+    build: build_dept,
+};
+
+/// `dept-bilateral`: `dept` with its spatial bilateral filter ([`DeptSettings::bilateral`]).
+pub static BILATERAL: crate::registry::Preset<DeptSettings> = crate::registry::Preset {
+    name: "dept-bilateral",
+    summary: "photon density estimation on mesh elements, spatial bilateral filter (a preset of dept)",
+    capabilities: DEPT_CAPABILITIES,
+    defaults: DeptSettings::bilateral,
+    build: build_dept,
+};

@@ -622,14 +622,32 @@ impl SequenceRenderer for SpacetimeDept {
             progress,
         );
         img.stats.rays += photon_rays;
+        if let Some(p) = self.last_photons {
+            img.report.insert("photons".into(), p.into());
+        }
         self.mesh = Some(mesh);
         img
     }
-
-    fn photons_last_frame(&self) -> Option<u64> {
-        self.last_photons
-    }
 }
+
+/// Registry entry of `spacetime-dept`.
+pub static TECHNIQUE: crate::registry::Preset<SpacetimeSettings> = crate::registry::Preset {
+    name: "spacetime-dept",
+    summary: "photon density estimation on mesh elements, space-time window + bilateral filter",
+    capabilities: crate::registry::Capabilities {
+        motion_blur: false,
+        photons: true,
+        window: true,
+        stateless: false,
+        effort: crate::registry::Effort {
+            key: "photons",
+            per_unit: 1000,
+            unit: "thousand photons per frame",
+        },
+    },
+    defaults: SpacetimeSettings::default,
+    build: |s, _, _| Box::new(SpacetimeDept::new(s)),
+};
 
 #[cfg(test)]
 mod tests {

@@ -174,8 +174,9 @@ pub struct StbptSettings {
     pub window: u32,
     /// Motion blur: fraction of the frame interval the shutter is open, centred on the
     /// frame time (0 = off). Each landed sample's trajectory is splatted (see "Motion
-    /// blur" in the module doc). Default 0.
-    #[serde(default)]
+    /// blur" in the module doc). Default 0. Not a light-transport setting: set from the
+    /// run's shutter when built, so it is not serialised with the technique's settings.
+    #[serde(skip)]
     pub shutter: f32,
     /// Memory budget of the accumulation films in MiB (all open frames together); tiles
     /// beyond it go to a disk cache ([`WindowFilm::with_budget`]). Default 512.
@@ -279,7 +280,6 @@ pub struct Stbpt {
     pending: BTreeMap<u32, Pending>,
     /// Mean number of frames served by the samples generated for each frame.
     served: BTreeMap<u32, f64>,
-    last: Option<ReuseStats>,
     last_output: Option<u32>,
 }
 
@@ -294,7 +294,6 @@ impl Stbpt {
             next: 0,
             pending: BTreeMap::new(),
             served: BTreeMap::new(),
-            last: None,
             last_output: None,
         }
     }
@@ -1386,7 +1385,7 @@ impl SequenceRenderer for Stbpt {
         let pixels = means.iter().zip(&splats).map(|(&m, &s)| m + s).collect();
         let p = self.pending.remove(&frame).unwrap_or_default();
         let npix = (w as f64 * h as f64).max(1.0);
-        self.last = Some(ReuseStats {
+        let reuse = ReuseStats {
             window,
             effective_spp: p.landed as f64 / npix,
             reused: p.reused,
@@ -1395,7 +1394,7 @@ impl SequenceRenderer for Stbpt {
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
             light_subpaths_per_pixel: spp as f64 * window as f64,
             film: self.film_stats(),
-        });
+        };
         self.served.retain(|&f, _| f + k >= frame);
         RenderedFrame {
             width: w,
@@ -1404,10 +1403,34 @@ impl SequenceRenderer for Stbpt {
             variance,
             stats: p.stats,
             invalid_samples: p.invalid,
+            report: [(
+                "reuse".to_string(),
+                serde_json::to_value(reuse).expect("serialisable"),
+            )]
+            .into_iter()
+            .collect(),
         }
     }
-
-    fn reuse_last_frame(&self) -> Option<ReuseStats> {
-        self.last.clone()
-    }
 }
+
+/// Registry entry of `stbpt`; the shutter is the run's ([`BuildContext`](crate::registry::BuildContext)).
+pub static TECHNIQUE: crate::registry::Preset<StbptSettings> = crate::registry::Preset {
+    name: "stbpt",
+    summary: "spatio-temporal BDPT: each sample reused in the frames of a window [f-K, f+K]",
+    capabilities: crate::registry::Capabilities {
+        motion_blur: true,
+        photons: false,
+        window: true,
+        stateless: false,
+        effort: crate::registry::Effort {
+            key: "spp",
+            per_unit: 1,
+            unit: "samples per pixel generated per frame",
+        },
+    },
+    defaults: StbptSettings::default,
+    build: |mut s, ctx, _| {
+        s.shutter = ctx.shutter;
+        Box::new(Stbpt::new(s))
+    },
+};

@@ -67,7 +67,7 @@ pub struct Contribution {
 }
 
 /// What the film did so far.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FilmStats {
     /// Largest number of bytes of accumulation tiles held in memory at once.
     pub peak_bytes: u64,

@@ -47,7 +47,9 @@ fn stbpt_frame(
     for f in 0..=out {
         let img = r.render_frame(&mut src, f, &|_| {});
         if f == out {
-            return (img, r.reuse_last_frame().expect("stbpt reports reuse"));
+            let reuse =
+                serde_json::from_value(img.report["reuse"].clone()).expect("stbpt reports reuse");
+            return (img, reuse);
         }
     }
     unreachable!()

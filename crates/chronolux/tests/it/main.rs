@@ -4,6 +4,8 @@
 
 mod bad_input;
 mod common;
+mod config;
+mod farm;
 mod info;
 mod render;
 mod shutter;

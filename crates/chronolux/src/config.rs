@@ -1,0 +1,177 @@
+//! The resolved configuration of a run: which technique with which settings, on which
+//! scene, frames and image. `run.json` records it whole (its `settings`), and
+//! `chronolux render --config run.json` replays it: the same configuration gives
+//! bit-identical frames.
+//!
+//! Precedence, lowest first: the technique's defaults (its registry entry), the `--config`
+//! file, the command line's flags (`--spp`, `--window`, …, each mapped to the settings key
+//! of the same name, found as [`registry::find_key`] finds keys), then each `--set
+//! key=value` in order. A flag the chosen technique has no setting for is an error, never
+//! silently ignored.
+
+use anyhow::{Context, Result, bail};
+use chronolux_render::dept::budget::PhotonCount;
+use chronolux_render::registry::{self, Technique};
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+use std::path::Path;
+
+/// Everything that decides the pixels of a run (not the thread count, not the output).
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RunConfig {
+    /// Registry name of the technique (`--method`).
+    pub method: String,
+    /// Its complete settings.
+    pub technique: Value,
+    /// The scene argument: a .gltf/.glb path or `builtin:NAME`; `null` for the demo.
+    pub scene: Option<String>,
+    pub stage: Option<String>,
+    /// Animation clip (name, or index when unnamed); `null` for none.
+    pub animation: Option<String>,
+    /// Camera by name; `null` for the first (or the automatic framing).
+    pub camera: Option<String>,
+    pub resolution: [u32; 2],
+    pub fps: f32,
+    pub frames: Vec<u32>,
+    /// Fraction of the frame interval the shutter is open (0: no motion blur).
+    pub shutter: f32,
+    /// PNG/preview exposure in stops (the EXR is never altered).
+    pub exposure: f32,
+}
+
+/// A `--config` file: a `run.json` (its `settings` are a [`RunConfig`]), a `RunConfig`
+/// alone, or a settings object of the chosen technique (partial: missing keys default).
+pub enum ConfigFile {
+    Run(Box<PartialRun>),
+    Settings(Value),
+}
+
+/// A [`RunConfig`] read from a file, every field optional (a hand-written file may give
+/// only some).
+#[derive(Clone, Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PartialRun {
+    pub method: Option<String>,
+    pub technique: Option<Value>,
+    pub scene: Option<String>,
+    pub stage: Option<String>,
+    pub animation: Option<String>,
+    pub camera: Option<String>,
+    pub resolution: Option<[u32; 2]>,
+    pub fps: Option<f32>,
+    pub frames: Option<Vec<u32>>,
+    pub shutter: Option<f32>,
+    pub exposure: Option<f32>,
+    /// Recorded in run.json but not part of the configuration (images do not depend on it).
+    #[serde(default, rename = "threads")]
+    pub _threads: Option<Value>,
+    /// Recorded by `chronolux reference`; not a render setting.
+    #[serde(default)]
+    pub kind: Option<Value>,
+}
+
+impl ConfigFile {
+    pub fn read(path: &Path) -> Result<ConfigFile> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("cannot read --config {}", path.display()))?;
+        let v: Value = serde_json::from_str(&text)
+            .with_context(|| format!("--config {} is not valid JSON", path.display()))?;
+        let run = match v.get("settings") {
+            Some(s) if v.get("frames").is_some() => s.clone(), // a run.json
+            _ => v,
+        };
+        if run.get("method").is_some() {
+            let p: PartialRun = serde_json::from_value(run)
+                .with_context(|| format!("--config {}: not a run configuration", path.display()))?;
+            if p.kind.as_ref().and_then(Value::as_str) == Some("reference") {
+                bail!(
+                    "--config {}: the run.json of `chronolux reference`, not of a render",
+                    path.display()
+                );
+            }
+            Ok(ConfigFile::Run(Box::new(p)))
+        } else if run.is_object() {
+            Ok(ConfigFile::Settings(run))
+        } else {
+            bail!("--config {}: expected a JSON object", path.display())
+        }
+    }
+
+    /// The method the file names, if any.
+    pub fn method(&self) -> Option<&str> {
+        match self {
+            ConfigFile::Run(p) => p.method.as_deref(),
+            ConfigFile::Settings(_) => None,
+        }
+    }
+
+    /// The run part of the file (empty for a settings-only file).
+    pub fn run(&self) -> PartialRun {
+        match self {
+            ConfigFile::Run(p) => (**p).clone(),
+            ConfigFile::Settings(_) => PartialRun::default(),
+        }
+    }
+}
+
+/// A command-line flag that names a technique setting.
+pub struct FlagSetting {
+    /// The flag as the user typed it (`--window`).
+    pub flag: &'static str,
+    /// The settings key it sets.
+    pub key: &'static str,
+    pub value: Value,
+}
+
+/// Parses `--set key=value` arguments.
+pub fn parse_sets(sets: &[String]) -> Result<Vec<(String, Value)>> {
+    sets.iter()
+        .map(|s| {
+            let (k, v) = s.split_once('=').with_context(|| {
+                format!("--set '{s}': expected key=value (e.g. --set window=6)")
+            })?;
+            let k = k.trim();
+            if k.is_empty() {
+                bail!("--set '{s}': empty key");
+            }
+            Ok((k.to_string(), registry::parse_value(v.trim())))
+        })
+        .collect()
+}
+
+/// The settings of `tech` from `base` (a config file's settings of the same technique),
+/// then the flags, then `--photons`, then the `--set`s. A flag the technique has no
+/// setting for is an error.
+pub fn technique_settings(
+    tech: &dyn Technique,
+    base: Option<&Value>,
+    flags: &[FlagSetting],
+    photons: Option<&str>,
+    sets: &[(String, Value)],
+) -> Result<Value> {
+    let mut s = registry::resolve(tech, base, &[]).map_err(anyhow::Error::msg)?;
+    for f in flags {
+        if registry::find_key(&s, f.key).is_none() {
+            bail!(
+                "{} does not apply to --method {} (its settings: {})",
+                f.flag,
+                tech.name(),
+                registry::keys(&s).join(", ")
+            );
+        }
+        registry::set_key(&mut s, f.key, f.value.clone()).map_err(anyhow::Error::msg)?;
+    }
+    if let Some(p) = photons {
+        if !tech.capabilities().photons {
+            bail!(
+                "--photons applies to the photon methods ({}) only, not {}",
+                registry::names_where(|c| c.photons).join(", "),
+                tech.name()
+            );
+        }
+        let count: PhotonCount = p.parse().map_err(anyhow::Error::msg)?;
+        registry::set_photons(&mut s, &count).map_err(anyhow::Error::msg)?;
+    }
+    registry::resolve(tech, Some(&s), sets).map_err(anyhow::Error::msg)
+}

@@ -1,0 +1,222 @@
+//! Settings from the command line and from files: `--set`, `--config`, replay of a
+//! `run.json`, methods and their checks from the registry, `bench quality --measure`.
+
+use crate::common::*;
+use std::path::Path;
+
+fn exrs(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "exr"))
+        .map(|p| {
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read(&p).unwrap(),
+            )
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn set_then_replay_of_run_json_is_bit_identical() {
+    let first = temp_dir("config-first");
+    ok(&run([
+        "render",
+        "--output",
+        first.to_str().unwrap(),
+        "--method",
+        "stbpt",
+        "--set",
+        "window=2",
+        "--set",
+        "film_budget_mb=64",
+        "--frames",
+        "0..4",
+        "--resolution",
+        "16x16",
+        "--spp",
+        "1",
+        "--seed",
+        "7",
+        "--no-preview",
+    ]));
+    let m = manifest(&first);
+    assert_eq!(m["settings"]["method"], "stbpt");
+    assert_eq!(m["settings"]["technique"]["window"], 2);
+    assert_eq!(m["settings"]["technique"]["film_budget_mb"], 64);
+    assert_eq!(m["settings"]["technique"]["bdpt"]["spp"], 1);
+    assert_eq!(m["settings"]["technique"]["bdpt"]["seed"], 7);
+    let again = temp_dir("config-again");
+    let run_json = first.join("run.json");
+    ok(&run([
+        "render",
+        "--config",
+        run_json.to_str().unwrap(),
+        "--output",
+        again.to_str().unwrap(),
+        "--no-preview",
+    ]));
+    let (a, b) = (exrs(&first), exrs(&again));
+    assert_eq!(a.len(), 4);
+    assert!(
+        a == b,
+        "a --config replay of run.json must give the same EXRs"
+    );
+    assert_eq!(manifest(&again)["settings"], {
+        let mut s = m["settings"].clone();
+        s["threads"] = manifest(&again)["settings"]["threads"].clone();
+        s
+    });
+    // A flag overrides the file: another seed, other pixels.
+    let other = temp_dir("config-other");
+    ok(&run([
+        "render",
+        "--config",
+        run_json.to_str().unwrap(),
+        "--seed",
+        "8",
+        "--frames",
+        "1",
+        "--output",
+        other.to_str().unwrap(),
+    ]));
+    assert_eq!(manifest(&other)["settings"]["technique"]["window"], 2);
+    assert_ne!(exrs(&other)[0].1, a[1].1);
+}
+
+#[test]
+fn a_settings_file_sets_keys_of_the_chosen_method() {
+    let dir = temp_dir("config-settings");
+    let file = dir.join("settings.json");
+    std::fs::write(&file, r#"{"rr_depth": 3, "max_depth": 4}"#).unwrap();
+    let out = dir.join("out");
+    ok(&run([
+        "render",
+        "--config",
+        file.to_str().unwrap(),
+        "--frames",
+        "0",
+        "--resolution",
+        "8x8",
+        "--spp",
+        "1",
+        "--output",
+        out.to_str().unwrap(),
+    ]));
+    let t = &manifest(&out)["settings"]["technique"];
+    assert_eq!(
+        (t["rr_depth"].clone(), t["max_depth"].clone()),
+        (3.into(), 4.into())
+    );
+    std::fs::write(&file, r#"{"rr_dpth": 3}"#).unwrap();
+    fails(
+        &run([
+            "render",
+            "--config",
+            file.to_str().unwrap(),
+            "--output",
+            out.to_str().unwrap(),
+        ]),
+        &["rr_dpth", "rr_depth", "max_depth"],
+    );
+}
+
+#[test]
+fn bad_settings_are_one_line_errors_naming_the_keys() {
+    let dir = temp_dir("config-bad");
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", "--output", dir.to_str().unwrap()];
+        args.extend(FAST);
+        args.extend(extra);
+        run(&args)
+    };
+    fails(
+        &render(&["--method", "stbpt", "--set", "windw=2"]),
+        &["windw", "window", "film_budget_mb"],
+    );
+    fails(
+        &render(&["--method", "stbpt", "--set", "window=two"]),
+        &["window", "two"],
+    );
+    fails(&render(&["--set", "window"]), &["key=value"]);
+    fails(
+        &render(&["--method", "path", "--window", "2"]),
+        &["--window", "path", "spp"],
+    );
+    fails(
+        &render(&["--method", "bdpt", "--photons", "1000"]),
+        &["--photons", "dept"],
+    );
+    assert!(!dir.join("frame_0000.exr").exists());
+}
+
+#[test]
+fn help_lists_every_technique_of_the_registry() {
+    let help = stdout(&run(["render", "--help"]));
+    for t in chronolux_render::registry::TECHNIQUES {
+        assert!(help.contains(t.name()), "{} missing from --help", t.name());
+        assert!(help.contains(t.summary()), "{} summary missing", t.name());
+    }
+}
+
+#[test]
+fn bench_quality_measures_a_subset_of_the_rendered_frames() {
+    let refs = temp_dir("measure-refs");
+    ok(&run([
+        "render",
+        "--output",
+        refs.to_str().unwrap(),
+        "--frames",
+        "0..4",
+        "--resolution",
+        "12x12",
+        "--spp",
+        "8",
+        "--no-preview",
+    ]));
+    // Only the measured frames need references.
+    std::fs::remove_file(refs.join("frame_0000.exr")).unwrap();
+    let out = run([
+        "bench",
+        "quality",
+        "--method",
+        "stbpt",
+        "--set",
+        "window=1",
+        "--frames",
+        "0..4",
+        "--measure",
+        "1..=2",
+        "--reference",
+        refs.to_str().unwrap(),
+        "--target-flip",
+        "0.9",
+        "--max-effort",
+        "1",
+        "--json",
+    ]);
+    ok(&out);
+    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    assert_eq!(j["frames"], serde_json::json!([0, 1, 2, 3]));
+    assert_eq!(j["measured"], serde_json::json!([1, 2]));
+    // Frames 1 and 2 are consecutive in the render: one flicker pair.
+    assert!(j["results"][0]["levels"][0]["flicker"].is_number(), "{j}");
+    fails(
+        &run([
+            "bench",
+            "quality",
+            "--frames",
+            "0..4",
+            "--measure",
+            "7",
+            "--reference",
+            refs.to_str().unwrap(),
+            "--target-flip",
+            "0.5",
+        ]),
+        &["--measure", "7"],
+    );
+}

@@ -6,6 +6,7 @@ mod blur;
 mod dept;
 mod determinism;
 mod furnace;
+mod matrix;
 mod multi_frame;
 mod peer;
 mod photon;

@@ -90,8 +90,8 @@ pub struct RaysArgs {
     /// Rays per set (hemi and box).
     #[arg(long, default_value_t = 1_000_000, value_name = "N")]
     pub rays: usize,
-    /// Write each ray set to DIR/<scene>_<set>.rays (little-endian f32 ox oy oz dx dy dz per
-    /// ray) with DIR/<scene>_<set>.json (our hit count and Σt), for other renderers.
+    /// Write each ray set to `DIR/<scene>_<set>.rays` (little-endian f32 ox oy oz dx dy dz
+    /// per ray) with `DIR/<scene>_<set>.json` (our hit count and Σt), for other renderers.
     #[arg(long, value_name = "DIR")]
     pub dump_rays: Option<PathBuf>,
 }

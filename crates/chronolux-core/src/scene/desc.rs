@@ -187,8 +187,8 @@ pub struct TextureRef {
     pub texture: TextureId,
     /// 0 = TEXCOORD_0, 1 = TEXCOORD_1.
     pub uv_set: u32,
-    /// KHR_texture_transform as a 2×3 affine map applied to the UV (column-major: uv' =
-    /// m[0]*u + m[1]*v + m[2]); identity when absent.
+    /// KHR_texture_transform as a 2×3 affine map applied to the UV (column-major:
+    /// `uv' = m[0]*u + m[1]*v + m[2]`); identity when absent.
     pub transform: [Vec2; 3],
 }
 

@@ -246,7 +246,7 @@ pub fn generate_camera_subpath_with<T: FnMut(&Ray) -> Option<Hit>>(
 }
 
 /// Generates a light subpath into `path` (cleared): a light chosen in proportion to power,
-/// a ray from [`Light::sample_le`], then up to `max_depth − 1` surface vertices traced in
+/// a ray from [`Light::sample_le`](chronolux_core::light::Light::sample_le), then up to `max_depth − 1` surface vertices traced in
 /// importance mode (the BSDF applies the adjoint shading-normal correction).
 ///
 /// ## Estimator contract

@@ -9,8 +9,8 @@
 //! | dimension | decision |
 //! | --- | --- |
 //! | 0 | light choice (power-proportional [`LightSampler`](chronolux_core::light::LightSampler)) |
-//! | 1, 2 | position on the light ([`Light::sample_le`] `u_pos`) |
-//! | 3, 4 | direction ([`Light::sample_le`] `u_dir`) |
+//! | 1, 2 | position on the light ([`Light::sample_le`](chronolux_core::light::Light::sample_le) `u_pos`) |
+//! | 3, 4 | direction ([`Light::sample_le`](chronolux_core::light::Light::sample_le) `u_dir`) |
 //! | 5 + 4b | bounce b: BSDF lobe |
 //! | 6 + 4b, 7 + 4b | bounce b: BSDF direction |
 //! | 8 + 4b | bounce b: Russian roulette |

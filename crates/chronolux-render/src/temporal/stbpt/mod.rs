@@ -131,7 +131,7 @@
 //! dropped. What stays is the open frames' films (value, square, splat, and four motion
 //! films with motion blur) in [`WindowFilm`]s sharing `film_budget_mb` (tiles beyond it go
 //! to a disk cache), the 2K + 2 scenes of the frame source, and one batch of
-//! [`TILES_PER_BATCH`] tiles of contributions: bounded whatever the resolution and frame
+//! `TILES_PER_BATCH` tiles of contributions: bounded whatever the resolution and frame
 //! count.
 //!
 //! Orthographic cameras: samples serve only their own frame (the landing test needs a

@@ -34,7 +34,7 @@ use crate::integrator::{
 use crate::pt::PathTracer;
 use crate::sequence::SequenceRenderer;
 use chronolux_core::scene::frame::FrameScene;
-use chronolux_core::scene::source::FrameSource;
+use chronolux_core::scene::source::{FrameSource, frame_time};
 
 /// Largest number of instants a shutter interval is discretised into.
 pub const MAX_INSTANTS: u32 = 16;
@@ -42,7 +42,7 @@ pub const MAX_INSTANTS: u32 = 16;
 /// Instants (s) of a frame's shutter: the midpoints of `n` equal sub-intervals of
 /// `[t − S/(2·fps), t + S/(2·fps)]`, `t = frame / fps`.
 pub fn shutter_instants(frame: u32, fps: f32, shutter: f32, n: u32) -> Vec<f32> {
-    let t = frame as f32 / fps;
+    let t = frame_time(frame, fps);
     let open = shutter / fps;
     (0..n)
         .map(|j| t + open * ((j as f32 + 0.5) / n as f32 - 0.5))

@@ -378,7 +378,7 @@ fn rays(a: RaysArgs) -> Result<()> {
     let pool = pool(tg.threads)?;
     let mut out = Vec::new();
     for t in targets(tg)? {
-        let time = tg.frame as f32 / tg.fps;
+        let time = chronolux_core::scene::source::frame_time(tg.frame, tg.fps);
         let (build, scene, tris) = pool.install(|| build_times(&t, time, tg.rounds))?;
         let sets = ray_sets(&scene, &tris, a.rays);
         let names = ["hemi", "box"];
@@ -491,7 +491,7 @@ fn build(a: BuildArgs) -> Result<()> {
     let pool = pool(tg.threads)?;
     let mut out = Vec::new();
     for t in targets(tg)? {
-        let time = tg.frame as f32 / tg.fps;
+        let time = chronolux_core::scene::source::frame_time(tg.frame, tg.fps);
         let (rec, _, _) = pool.install(|| build_times(&t, time, tg.rounds))?;
         out.push(json!({"scene": t.label, "source": t.source, "load_s": t.load_s, "build": rec}));
     }

@@ -168,7 +168,7 @@ pub enum WrapMode {
 }
 
 /// A decoded 8-bit RGBA image with its sampler settings.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     pub name: String,
     pub width: u32,
@@ -221,7 +221,7 @@ pub enum AlphaMode {
 
 /// A glTF metallic-roughness material with the extensions Chronolux supports.
 /// Colours are linear. Textures multiply their factors (glTF rule).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
     /// Linear RGB base colour factor.

@@ -3,6 +3,7 @@
 
 mod bdpt;
 mod blur;
+mod delta;
 mod dept;
 mod determinism;
 mod furnace;

@@ -5,6 +5,7 @@
 mod bad_input;
 mod common;
 mod config;
+mod farm;
 mod info;
 mod render;
 mod shutter;

@@ -201,7 +201,7 @@ impl Default for CacheParams {
     fn default() -> Self {
         CacheParams {
             accuracy: 0.2,
-            r_min_px: 1.0,
+            r_min_px: 2.0,
             r_max_px: 16.0,
         }
     }

@@ -6,8 +6,8 @@
 //! ## Method
 //! The render list is cut into segments of `segment` frames (0: automatic, one second of
 //! animation, `round(fps)` frames). For a segment:
-//! - the **dynamic instances** are those whose transform or vertices differ between any
-//!   two frames of the segment ([`dynamic_instances`]); the **static scene** `S` is the
+//! - the **dynamic instances** are those that move or deform anywhere in the segment
+//!   ([`FrameDelta::over`]); the **static scene** `S` is the
 //!   segment's first frame with them emptied
 //!   ([`FrameScene::without_instances`]: ids, lights and bounds kept, so photon `i` makes
 //!   the same decisions in `S` and in every frame until it meets a dynamic object);
@@ -39,9 +39,10 @@
 //! - the caustic map is traced per frame in `F` from the caustic stream's photons `0..N`
 //!   (the same photons every frame, so static caustics do not flicker).
 //!
-//! **Lights**: if any light differs between frames of the segment (a moving or changing
-//! light, or the scene bounds change while a directional or environment light depends on
-//! them), every photon of the segment is dynamic: the static scene has no photons, and
+//! **Lights and materials**: if any light differs between frames of the segment (a moving
+//! or changing light, or the scene bounds change while a directional or environment light
+//! depends on them; [`FrameDelta::lights_changed`]) or a material changes, every photon of
+//! the segment is dynamic: the static scene has no photons, and
 //! the dynamic cache serves every point (`β = 1`) — frame by frame within that segment.
 //! This is coarser than the papers' per-light split (only the moving light's photons
 //! dynamic), because the kernel chooses a photon's light from its own Halton dimension.
@@ -60,8 +61,6 @@
 //!   objects; here a photon is dynamic when its hits differ, which also catches paths
 //!   that only pass through where an object now is (the negative photons) without a
 //!   separate shadow-photon pass.
-//! - Which instances are dynamic is decided by comparing the frames' instances
-//!   ([`dynamic_instances`]); it should be replaced by `FrameDelta` when it lands.
 
 use super::cache::IrradianceCache;
 use super::photon_map::{PhotonMap, StoredPhoton, cancel_twins};
@@ -73,8 +72,8 @@ use super::{
 use crate::integrator::{RenderedFrame, render_camera_rays};
 use crate::kernels::photon::trace_photons;
 use chronolux_core::color::{Rgb, luminance};
-use chronolux_core::light::Light;
 use chronolux_core::sampling::hash_words;
+use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
 use std::sync::Arc;
@@ -106,51 +105,6 @@ impl Default for IcStaticDynamicSettings {
             influence_high: 0.25,
         }
     }
-}
-
-/// Which instances of `frames` (scenes of the same animation) are dynamic: their transform
-/// or the vertices of a geometry they carry differ between some frame and the first.
-/// A stand-in for `FrameDelta` (chronolux-core, `scene/delta.rs` on its branch), which
-/// should replace it when it lands on main.
-pub fn dynamic_instances(frames: &[Arc<FrameScene>]) -> Vec<bool> {
-    let first = &frames[0];
-    let n = first.accel.instances().len();
-    let mut dynamic = vec![false; n];
-    for f in &frames[1..] {
-        let inst = f.accel.instances();
-        if inst.len() != n {
-            return vec![true; n];
-        }
-        for (i, (a, b)) in first.accel.instances().iter().zip(inst).enumerate() {
-            if a.world_from_object != b.world_from_object {
-                dynamic[i] = true;
-            }
-        }
-        for (g, (a, b)) in first.geometry.iter().zip(f.geometry.iter()).enumerate() {
-            if !Arc::ptr_eq(&a.positions, &b.positions) && a.positions != b.positions {
-                let i = first.geometry_instance[g] as usize;
-                if i < n {
-                    dynamic[i] = true;
-                }
-            }
-        }
-    }
-    dynamic
-}
-
-/// Whether the lights (and, for lights that depend on them, the scene bounds) are the
-/// same in every frame.
-pub fn lights_static(frames: &[Arc<FrameScene>]) -> bool {
-    let first = &frames[0];
-    let bounds_matter = first
-        .lights
-        .iter()
-        .any(|l| matches!(l, Light::Directional { .. } | Light::Environment { .. }));
-    frames[1..].iter().all(|f| {
-        format!("{:?}", f.lights) == format!("{:?}", first.lights)
-            && (!bounds_matter
-                || (f.bounds.min == first.bounds.min && f.bounds.max == first.bounds.max))
-    })
 }
 
 /// A photon of the global stream with what the maps need to know of it.
@@ -228,8 +182,10 @@ impl IcStaticDynamic {
         let s = &self.settings.pmic;
         let list: Vec<u32> = source.frames()[first..end].to_vec();
         let frames: Vec<Arc<FrameScene>> = list.iter().map(|&f| source.frame(f)).collect();
-        let dynamic = dynamic_instances(&frames);
-        let lights_static = lights_static(&frames);
+        let refs: Vec<&FrameScene> = frames.iter().map(|f| &**f).collect();
+        let delta = FrameDelta::over(&refs);
+        let dynamic = delta.dynamic_instances();
+        let lights_static = !delta.lights_changed() && !delta.materials_changed();
         let scene = frames[0].without_instances(&dynamic);
         let hits = if lights_static {
             trace_tagged(&scene, s.photons, s.seed)

@@ -30,7 +30,9 @@
 //!   `r_max_px` pixel footprints at the record (Tabellion & Lamorlette 2004 clamp in
 //!   pixels too), after limiting it by the translational gradient
 //!   (`R_i ≤ E_i/|∇t E_i|`, luminance; Křivánek & Gautron 2009 §2.3.2) so a steep
-//!   gradient shrinks the record's reach instead of extrapolating past zero.
+//!   gradient shrinks the record's reach instead of extrapolating past zero; when the
+//!   lower clamp then raises `R_i` again, the translational gradient is scaled down by
+//!   the same factor, so `|∇t E_i|·R_i ≤ E_i` still holds.
 //! - Spatial structure: a hashed multi-level grid (cell sizes doubling from a base); a
 //!   record is stored at the level whose cell is at least its validity diameter `2aR_i`,
 //!   in the ≤ 8 cells its validity sphere touches, so a query reads one cell per level
@@ -217,14 +219,22 @@ pub fn make_record(p: Vec3, n: Vec3, g: &Gather, r_min: f32, r_max: f32) -> Reco
     if gl > 0.0 && e_lum > 0.0 {
         r = r.min(e_lum / gl);
     }
+    let limited = r;
     let r = r.clamp(r_min, r_max.max(r_min));
+    // A radius raised by the lower clamp must not extrapolate the gradient further than
+    // the limit allowed: scale it down by the same factor (Křivánek & Gautron 2009).
+    let mut grad_t = g.grad_t;
+    if r > limited && limited.is_finite() && limited > 0.0 {
+        let k = limited / r;
+        grad_t = grad_t.map(|v| v * k);
+    }
     Record {
         p,
         n,
         e: g.e,
         r,
         grad_r: g.grad_r,
-        grad_t: g.grad_t,
+        grad_t,
     }
 }
 

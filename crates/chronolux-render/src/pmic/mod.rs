@@ -28,7 +28,8 @@
 //! Records are made lazily but not during the parallel eye pass: first a **probe pass**
 //! finds the cache point of each pixel centre (the eye walk above with numbers hashed from
 //! the pixel), on a coarse-to-fine grid (pixel strides 16, 8, 4, 2, 1; each level only the
-//! pixels not on a coarser one), in row-major order. Those points are taken in batches of
+//! pixels not on a coarser one), in row-major order, and last at the four quarter points
+//! of every pixel. Those points are taken in batches of
 //! [`BATCH`]: each batch drops the points some existing record already covers
 //! (sequentially), gathers the rest in parallel and inserts them in point order. The
 //! records therefore depend only on the batch size, not on the thread count. The eye pass
@@ -286,13 +287,16 @@ pub fn point_key(x: Vec3, n: Vec3) -> u64 {
 }
 
 /// The probe pass: the cache point of each pixel centre of the coarse-to-fine grid
-/// ([`PROBE_STRIDES`]), in level then row-major order, with a key per pixel.
+/// ([`PROBE_STRIDES`]), in level then row-major order, then of the four quarter points of
+/// every pixel (so pixels straddling an edge get records on both surfaces), with a key
+/// per point.
 pub fn probe_points<S: IndirectSource>(
     view: &EyeView<'_, S>,
     scene: &FrameScene,
     key: u64,
 ) -> Vec<(u64, CacheQuery)> {
     let (w, h) = (scene.camera.width, scene.camera.height);
+    // (pixel x, pixel y, sub-position): 0 is the centre, 1..=4 the quarter points.
     let mut pixels = Vec::new();
     for (li, &stride) in PROBE_STRIDES.iter().enumerate() {
         for y in (0..h).step_by(stride as usize) {
@@ -301,19 +305,34 @@ pub fn probe_points<S: IndirectSource>(
                     .iter()
                     .any(|&c| x % c == 0 && y % c == 0);
                 if !coarser {
-                    pixels.push((x, y));
+                    pixels.push((x, y, 0u32));
                 }
             }
         }
     }
+    for y in 0..h {
+        for x in 0..w {
+            for sub in 1..=4 {
+                pixels.push((x, y, sub));
+            }
+        }
+    }
+    const SUB: [(f32, f32); 5] = [
+        (0.5, 0.5),
+        (0.25, 0.25),
+        (0.75, 0.25),
+        (0.25, 0.75),
+        (0.75, 0.75),
+    ];
     let found = parallel::map_chunks(pixels.len(), 64, |r| {
         let mut out = Vec::new();
-        for &(x, y) in &pixels[r] {
-            let k = hash_words(&[key, x as u64, y as u64]);
+        for &(x, y, sub) in &pixels[r] {
+            let k = hash_words(&[key, x as u64, y as u64, sub as u64]);
             let mut rng = Pcg32::new(k, 0x7072_6f62);
+            let (dx, dy) = SUB[sub as usize];
             let ray = scene
                 .camera
-                .generate_ray(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+                .generate_ray(Vec2::new(x as f32 + dx, y as f32 + dy));
             if let Some(q) = view.probe(scene, &ray, &mut rng) {
                 out.push((k, q));
             }
@@ -323,21 +342,23 @@ pub fn probe_points<S: IndirectSource>(
     found.into_iter().flatten().collect()
 }
 
-/// Adds records to `cache` for the points `want` accepts that no record covers yet, in
-/// batches of [`BATCH`] (see the module doc); `gather_fn(point, key)` makes a gather.
-/// Returns the records added.
+/// Adds records to `cache` for the points `want` accepts (by index in `points`) that no
+/// record covers yet, in batches of [`BATCH`] (see the module doc); `gather_fn(point,
+/// key)` makes a gather. Returns the records added.
 pub fn extend_cache(
     cache: &mut IrradianceCache,
     points: &[(u64, CacheQuery)],
     params: &CacheParams,
-    want: impl Fn(&CacheQuery) -> bool + Sync,
+    want: impl Fn(usize) -> bool + Sync,
     gather_fn: impl Fn(&CacheQuery, u64) -> Gather + Sync,
 ) -> u64 {
     let mut added = 0;
-    for batch in points.chunks(BATCH) {
+    for (b, batch) in points.chunks(BATCH).enumerate() {
         let need: Vec<&(u64, CacheQuery)> = batch
             .iter()
-            .filter(|(_, q)| want(q) && !cache.covers(q.p, q.n))
+            .enumerate()
+            .filter(|(i, (_, q))| want(b * BATCH + i) && !cache.covers(q.p, q.n))
+            .map(|(_, p)| p)
             .collect();
         if need.is_empty() {
             continue;

@@ -295,6 +295,14 @@ impl IcStaticDynamic {
             low,
             high,
         };
+        // β of every cache point, once, in parallel (the record passes only read it).
+        let betas: Vec<f32> = chronolux_core::parallel::map_chunks(points.len(), 256, |r| {
+            points[r]
+                .iter()
+                .map(|(_, q)| blend.beta(scene, q))
+                .collect::<Vec<_>>()
+        })
+        .concat();
         let static_before = seg.cache.len();
         let static_scene = &seg.scene;
         let static_map = &seg.map;
@@ -302,7 +310,7 @@ impl IcStaticDynamic {
             &mut seg.cache,
             &points,
             &s.cache,
-            |q| blend.beta(scene, q) < 1.0,
+            |i| betas[i] < 1.0,
             |q, k| gather_at(static_scene, &s, &[static_map], q.p, q.n, k),
         );
         let static_added = seg.cache.len() - static_before;
@@ -311,13 +319,10 @@ impl IcStaticDynamic {
             &mut dyn_cache,
             &points,
             &s.cache,
-            |q| blend.beta(scene, q) > 0.0,
+            |i| betas[i] > 0.0,
             |q, k| gather_at(scene, &s, &[static_map, &dyn_map], q.p, q.n, k),
         );
-        let blended_points = points
-            .iter()
-            .filter(|(_, q)| blend.beta(scene, q) > 0.0)
-            .count();
+        let blended_points = betas.iter().filter(|b| **b > 0.0).count();
         let t_cache = t0.elapsed().as_secs_f64() - t_segment - t_photons;
 
         let src = StaticDynamicSource {

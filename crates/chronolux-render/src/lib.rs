@@ -26,6 +26,11 @@
 //!   [`temporal::spacetime_dept`].
 //! - `stbpt`: spatio-temporal BDPT (Havran et al. 2003), each bidirectional sample reused
 //!   in the frames of a window around its own — [`temporal::stbpt`].
+//! - `pm-ic`: photon mapping (global + caustic maps in a k-d tree) with final gathering
+//!   cached in an irradiance cache with gradients, frame by frame — [`pmic`].
+//! - `ic-static-dynamic`: the same with a static cache per segment of frames and dynamic
+//!   photons (negative ones included) and a dynamic cache per frame, blended —
+//!   [`pmic::static_dynamic`].
 
 pub mod aov;
 pub mod bdpt;
@@ -33,6 +38,7 @@ pub mod dept;
 pub mod integrator;
 pub mod kernels;
 pub mod motion_blur;
+pub mod pmic;
 pub mod pt;
 pub mod registry;
 pub mod run;

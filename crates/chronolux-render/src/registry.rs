@@ -201,6 +201,8 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
     &crate::dept::BILATERAL,
     &crate::temporal::stbpt::TECHNIQUE,
     &crate::temporal::spacetime_dept::TECHNIQUE,
+    &crate::pmic::TECHNIQUE,
+    &crate::pmic::static_dynamic::TECHNIQUE,
 ];
 
 /// The technique called `name`, or an error listing the known ones.

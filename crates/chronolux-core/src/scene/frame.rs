@@ -216,6 +216,50 @@ impl FrameScene {
         material::emission_at(m, &self.textures, &si.shading)
     }
 
+    /// This frame with the instances `drop[i]` (true) emptied: each is replaced by an empty
+    /// placeholder, so instance and geometry ids, lights, camera, bounds and scene radius
+    /// stay exactly those of the frame (a photon or camera path traced in the copy makes
+    /// the same decisions as in the frame until it would have hit a dropped instance).
+    /// The light list is kept as is: the caller decides what a light on a dropped
+    /// instance means. Used for the static part of a segment of frames (the scene without
+    /// its dynamic objects, `ic-static-dynamic`).
+    pub fn without_instances(&self, drop: &[bool]) -> FrameScene {
+        let empty = Arc::new(crate::accel::Blas::build(&[], false));
+        let instances = self
+            .accel
+            .instances()
+            .iter()
+            .enumerate()
+            .map(|(i, inst)| {
+                if drop.get(i).copied().unwrap_or(false) {
+                    Instance::new(empty.clone(), inst.world_from_object)
+                        .with_geometry_base(inst.geometry_base)
+                } else {
+                    inst.clone()
+                }
+            })
+            .collect();
+        let mut accel = Accel::new(instances);
+        accel.bounds = self.bounds;
+        FrameScene {
+            time: self.time,
+            accel,
+            geometry: self.geometry.clone(),
+            materials: self.materials.clone(),
+            textures: self.textures.clone(),
+            lights: self.lights.clone(),
+            light_sampler: self.light_sampler.clone(),
+            emissive_base: self.emissive_base.clone(),
+            environment: self.environment,
+            environment_light: self.environment_light,
+            camera: self.camera.clone(),
+            bounds: self.bounds,
+            scene_radius: self.scene_radius,
+            geometry_instance: self.geometry_instance.clone(),
+            alpha_tested: self.alpha_tested.clone(),
+        }
+    }
+
     /// Light index of an emissive triangle.
     pub fn light_of(&self, tri: TriRef) -> Option<usize> {
         let b = self.emissive_base[tri.geometry as usize];

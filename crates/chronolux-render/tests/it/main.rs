@@ -12,6 +12,7 @@ mod matrix;
 mod multi_frame;
 mod peer;
 mod photon;
+mod pmic;
 mod stbpt;
 mod window_film;
 

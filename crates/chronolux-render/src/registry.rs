@@ -146,6 +146,7 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
     &crate::dept::BILATERAL,
     &crate::temporal::stbpt::TECHNIQUE,
     &crate::temporal::spacetime_dept::TECHNIQUE,
+    &crate::spt::TECHNIQUE,
 ];
 
 /// The technique called `name`, or an error listing the known ones.

@@ -52,7 +52,7 @@ use super::direct::light_radiance_at;
 use chronolux_core::accel::TriRef;
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
-use chronolux_core::geometry::spawn_ray;
+use chronolux_core::geometry::{Ray, spawn_ray};
 use chronolux_core::material;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
@@ -154,24 +154,28 @@ pub fn trace_photon(
         scene,
         index,
         seed,
-        |_| {},
+        |_, _| {},
         |v| {
             if v.deposited {
                 callback(&v.hit)
             }
         },
+        |_| {},
     )
 }
 
 /// [`trace_photon`] reporting everything the path touches: the emitting light (index into
-/// [`FrameScene::lights`], before the first vertex; not called when nothing is emitted)
-/// and every vertex, delta (purely specular) ones included. Same path, same stats.
+/// [`FrameScene::lights`]) with the emitted ray, before the first vertex (not called when
+/// nothing is emitted); every vertex, delta (purely specular) ones included; and the ray
+/// that left the scene, if the path ended by missing every surface (`on_escape`). Same
+/// path, same stats.
 pub fn trace_photon_path(
     scene: &FrameScene,
     index: u64,
     seed: u64,
-    mut on_light: impl FnMut(usize),
+    mut on_light: impl FnMut(usize, &Ray),
     mut on_vertex: impl FnMut(&PathVertex),
+    mut on_escape: impl FnMut(&Ray),
 ) -> PhotonStats {
     let mut stats = PhotonStats::default();
     let h = |dim: usize| halton(dim, index, seed);
@@ -199,13 +203,14 @@ pub fn trace_photon_path(
     if beta == Rgb::ZERO || !beta.is_finite() {
         return stats;
     }
-    on_light(li);
+    on_light(li, &les.ray);
     let mut ray = les.ray;
     let mut bounces = 0u32;
     let mut all_specular = true;
     loop {
         stats.rays += 1;
         let Some(hit) = scene.intersect(&ray) else {
+            on_escape(&ray);
             break;
         };
         let si = scene.interaction(&hit, &ray);

@@ -106,6 +106,10 @@ pub struct SptSettings {
     pub budget_fraction: f64,
     /// Wall-clock milliseconds of re-shooting per frame (0 = no time limit). Default 0.
     pub budget_ms: f64,
+    /// Besides the pilots, scan the stored paths: queue the groups of photons whose last
+    /// path touched a change or crosses the new bounds of a changed instance (complete:
+    /// no stale group is missed). `false`: pilots only, as in the paper. Default true.
+    pub scan_paths: bool,
     /// Relative power difference at which a pilot's path counts as changed. Default 1e-4.
     pub path_tolerance: f32,
     /// Re-trace the whole pool after each update to count the pilots' misses (costly;
@@ -137,6 +141,7 @@ impl Default for SptSettings {
             order: Order::Priority,
             budget_fraction: 0.25,
             budget_ms: 0.0,
+            scan_paths: true,
             path_tolerance: 1e-4,
             audit: false,
             spp: 16,
@@ -263,6 +268,8 @@ impl crate::sequence::SequenceRenderer for Spt {
         r.insert("photons_traced".into(), u.photons_traced.into());
         r.insert("pilots_traced".into(), u.pilots_traced.into());
         r.insert("groups_invalidated".into(), u.groups_invalidated.into());
+        r.insert("groups_by_pilots".into(), u.groups_by_pilots.into());
+        r.insert("groups_by_scan".into(), u.groups_by_scan.into());
         r.insert("groups_reshot".into(), u.groups_reshot.into());
         r.insert("groups_carried_over".into(), u.groups_queued.into());
         r.insert("update_seconds".into(), u.seconds.into());

@@ -4,11 +4,14 @@
 use super::delta::SceneChanges;
 use super::groups::{GroupLayout, used_dims};
 use super::{Order, SptSettings};
-use crate::dept::element_map::{ElementAccumulators, ElementMesh, FrameElements, slot};
+use crate::dept::element_map::{
+    ElementAccumulators, ElementMesh, FrameElements, geometry_transforms, slot,
+};
 use crate::kernels::photon::{PhotonStats, trace_photon_path};
 use chronolux_core::accel::TriRef;
 use chronolux_core::color::{Rgb, luminance};
-use chronolux_core::math::Vec2;
+use chronolux_core::geometry::Bounds3;
+use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::hash_words;
 use chronolux_core::scene::frame::FrameScene;
@@ -26,6 +29,8 @@ const CAUSTIC: u8 = 2;
 /// One vertex of a stored photon path.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RecVertex {
+    /// World position of the hit.
+    pub p: Vec3,
     pub instance: u32,
     pub material: u32,
     pub tri: TriRef,
@@ -40,7 +45,12 @@ pub struct RecVertex {
 pub struct PhotonRecord {
     /// Emitting light ([`NONE`]: nothing emitted).
     pub light: u32,
+    /// Where the photon left the light.
+    pub origin: Vec3,
     pub vertices: Vec<RecVertex>,
+    /// Direction of the last segment when it left the scene without a hit (zero when the
+    /// path ended at a vertex or emitted nothing).
+    pub escape: Vec3,
 }
 
 impl PhotonRecord {
@@ -52,6 +62,25 @@ impl PhotonRecord {
                 changes.instance_changed(v.instance as usize)
                     || changes.material_changed(v.material as usize)
             })
+    }
+
+    /// Some segment of the path (emission point → vertices → escape ray) passes through
+    /// one of `boxes` (conservative: a segment that crosses a box may miss what is in it).
+    pub fn crosses(&self, boxes: &[Bounds3]) -> bool {
+        if self.light == NONE || boxes.is_empty() {
+            return false;
+        }
+        let mut a = self.origin;
+        for v in &self.vertices {
+            if boxes.iter().any(|b| segment_hits_box(a, v.p - a, 1.0, b)) {
+                return true;
+            }
+            a = v.p;
+        }
+        self.escape != Vec3::ZERO
+            && boxes
+                .iter()
+                .any(|b| segment_hits_box(a, self.escape, f32::INFINITY, b))
     }
 
     /// The two paths differ: another light, another vertex count, another instance,
@@ -83,14 +112,20 @@ pub fn trace_record(
 ) -> (PhotonRecord, PhotonStats) {
     let mut rec = PhotonRecord {
         light: NONE,
+        origin: Vec3::ZERO,
         vertices: Vec::new(),
+        escape: Vec3::ZERO,
     };
     let mut verts = Vec::new();
+    let mut escape = Vec3::ZERO;
     let stats = trace_photon_path(
         scene,
         i,
         seed,
-        |l| rec.light = l as u32,
+        |l, ray| {
+            rec.light = l as u32;
+            rec.origin = ray.o;
+        },
         |v| {
             let h = &v.hit;
             let (s, kind) = if v.deposited {
@@ -107,6 +142,7 @@ pub fn trace_record(
                 (NONE, DIRECT)
             };
             verts.push(RecVertex {
+                p: h.p,
                 instance: h.instance,
                 material: v.material,
                 tri: h.tri,
@@ -115,9 +151,67 @@ pub fn trace_record(
                 power: h.power,
             });
         },
+        |ray| escape = ray.d,
     );
     rec.vertices = verts;
+    rec.escape = escape;
     (rec, stats)
+}
+
+/// Slab test: does the segment `o + t·d`, `t ∈ [0, t_max]`, meet box `b`?
+#[inline]
+pub fn segment_hits_box(o: Vec3, d: Vec3, t_max: f32, b: &Bounds3) -> bool {
+    let (mut t0, mut t1) = (0.0f32, t_max);
+    for k in 0..3 {
+        let inv = 1.0 / d[k];
+        let (mut a, mut c) = ((b.min[k] - o[k]) * inv, (b.max[k] - o[k]) * inv);
+        if a > c {
+            std::mem::swap(&mut a, &mut c);
+        }
+        // NaN (d = 0 and o on a slab plane) keeps the current interval.
+        if a > t0 {
+            t0 = a;
+        }
+        if c < t1 {
+            t1 = c;
+        }
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
+}
+
+/// World bounds, in `scene`, of every instance `changed` says changed (slightly padded).
+pub fn changed_instance_bounds(scene: &FrameScene, changes: &SceneChanges) -> Vec<Bounds3> {
+    let xf = geometry_transforms(scene);
+    let n = scene.accel.instances().len();
+    let mut boxes: Vec<Option<Bounds3>> = vec![None; n];
+    for (g, geo) in scene.geometry.iter().enumerate() {
+        let i = scene.geometry_instance[g] as usize;
+        if i >= n || !changes.instance_changed(i) {
+            continue;
+        }
+        for p in geo.positions.iter() {
+            let q = xf[g].transform_point3(*p);
+            let b = Bounds3 { min: q, max: q };
+            boxes[i] = Some(match boxes[i] {
+                None => b,
+                Some(o) => o.union(&b),
+            });
+        }
+    }
+    boxes
+        .into_iter()
+        .flatten()
+        .map(|b| {
+            let pad = 1e-4 * (b.max - b.min).length().max(1e-3);
+            Bounds3 {
+                min: b.min - Vec3::splat(pad),
+                max: b.max + Vec3::splat(pad),
+            }
+        })
+        .collect()
 }
 
 /// Traces photons `indices` in parallel; records in the order of `indices`.
@@ -270,8 +364,12 @@ impl Budget {
 pub struct UpdateStats {
     /// Pilot photons re-traced.
     pub pilots_traced: u64,
-    /// Groups newly marked invalid by their pilots (or, in scratch order, all groups).
+    /// Groups newly marked invalid (pilots and path scan; in scratch order, all groups).
     pub groups_invalidated: u64,
+    /// Groups whose pilots saw the change.
+    pub groups_by_pilots: u64,
+    /// Groups only the scan of the stored paths found (`scan_paths`).
+    pub groups_by_scan: u64,
     /// Groups re-shot.
     pub groups_reshot: u64,
     /// Groups still queued afterwards (carried over to the next update).
@@ -288,6 +386,8 @@ impl std::ops::AddAssign<&UpdateStats> for UpdateStats {
     fn add_assign(&mut self, o: &UpdateStats) {
         self.pilots_traced += o.pilots_traced;
         self.groups_invalidated += o.groups_invalidated;
+        self.groups_by_pilots += o.groups_by_pilots;
+        self.groups_by_scan += o.groups_by_scan;
         self.groups_reshot += o.groups_reshot;
         self.groups_queued = o.groups_queued;
         self.photons_traced += o.photons_traced;
@@ -308,6 +408,8 @@ pub struct Audit {
     pub miss_rate: f64,
     /// Stale photons in missed groups.
     pub missed_photons: u64,
+    /// Stale photons in all.
+    pub stale_photons: u64,
 }
 
 /// Side length of the grid of primary rays that estimates each element's screen coverage.
@@ -353,9 +455,20 @@ pub struct SptState {
 }
 
 impl SptState {
-    /// Shoots the whole pool in `scene`.
+    /// Shoots the whole pool in `scene`, on an element mesh built from it.
     pub fn new(scene: Arc<FrameScene>, settings: SptSettings) -> SptState {
         let mesh = ElementMesh::build(&scene, settings.elements);
+        Self::new_on_mesh(scene, settings, mesh)
+    }
+
+    /// Shoots the whole pool in `scene` on a given element mesh (element ids of another
+    /// state's mesh, for comparisons; it must [match](ElementMesh::matches) `scene`).
+    pub fn new_on_mesh(
+        scene: Arc<FrameScene>,
+        settings: SptSettings,
+        mesh: ElementMesh,
+    ) -> SptState {
+        assert!(mesh.matches(&scene), "element mesh of another topology");
         let layout = GroupLayout::choose(
             settings.photons,
             settings.group_size.max(1),
@@ -479,7 +592,10 @@ impl SptState {
                 }
                 if differs {
                     change[g] += self.perceived_change(old, &rec);
-                    // The pilot itself is brought up to date at once.
+                }
+                if *old != rec {
+                    // The pilot itself is brought up to date at once (also when it differs
+                    // by less than the tolerance: the pool stays exactly current).
                     if self.in_solution[g] {
                         self.solution.apply(old, -1.0);
                         self.solution.apply(&rec, 1.0);
@@ -488,6 +604,30 @@ impl SptState {
                 }
             }
             self.pilots_current = true;
+            st.groups_by_pilots = invalid.iter().filter(|&&b| b).count() as u64;
+            if self.settings.scan_paths {
+                // Every stored path that touched a change, or whose segments cross the
+                // new bounds of a changed instance, is (possibly) stale: its group goes
+                // into the queue too, with the change its removal makes as its weight.
+                let boxes = changed_instance_bounds(&self.scene, changes);
+                let z = self.records.len();
+                let hits = parallel::map_chunks(z, 4096, |r| {
+                    r.filter(|&i| {
+                        let rec = &self.records[i];
+                        rec.touches(changes) || rec.crosses(&boxes)
+                    })
+                    .collect::<Vec<usize>>()
+                });
+                let empty = PhotonRecord::default();
+                for i in hits.into_iter().flatten() {
+                    let g = i % groups as usize;
+                    if !invalid[g] {
+                        invalid[g] = true;
+                        st.groups_by_scan += 1;
+                    }
+                    change[g] += self.perceived_change(&self.records[i], &empty);
+                }
+            }
             for g in 0..groups as usize {
                 if !invalid[g] {
                     continue;
@@ -512,12 +652,7 @@ impl SptState {
                 }
             }
         }
-        self.queue = (0..groups as u32)
-            .filter(|&g| self.queued[g as usize])
-            .collect();
-        let key = &self.key;
-        self.queue
-            .sort_by(|a, b| key[*a as usize].total_cmp(&key[*b as usize]).then(b.cmp(a)));
+        self.sort_queue();
         st.groups_queued = self.queue.len() as u64;
         st.seconds = t0.elapsed().as_secs_f64();
         st
@@ -559,6 +694,33 @@ impl SptState {
             .map(|k| s.direct.lum(k) + s.indirect.lum(k) + s.caustic.lum(k))
             .sum();
         t / self.photons_in_solution.max(1) as f64
+    }
+
+    /// Queues `groups` for re-shooting (ahead of every queued group in priority order,
+    /// with a fresh random key in random order) whatever their pilots say: for a caller
+    /// that knows better (a viewer's "refresh", tests).
+    pub fn requeue(&mut self, groups: impl IntoIterator<Item = u64>) {
+        for g in groups {
+            let g = g as usize;
+            self.queued[g] = true;
+            self.key[g] = match self.settings.order {
+                Order::Random => {
+                    (hash_words(&[self.settings.seed, self.epoch, g as u64, 0x5245_51]) >> 11)
+                        as f64
+                }
+                _ => f64::MAX,
+            };
+        }
+        self.sort_queue();
+    }
+
+    fn sort_queue(&mut self) {
+        self.queue = (0..self.layout.groups as u32)
+            .filter(|&g| self.queued[g as usize])
+            .collect();
+        let key = &self.key;
+        self.queue
+            .sort_by(|a, b| key[*a as usize].total_cmp(&key[*b as usize]).then(b.cmp(a)));
     }
 
     /// Re-shoots queued groups in queue order within `budget`, one group after the other
@@ -654,6 +816,7 @@ impl SptState {
         for (k, &s) in stale.iter().enumerate() {
             if s > 0 {
                 a.stale_groups += 1;
+                a.stale_photons += s;
                 if !self.queued[k] {
                     a.missed_groups += 1;
                     a.missed_photons += s;

@@ -9,6 +9,7 @@ mod furnace;
 mod multi_frame;
 mod peer;
 mod photon;
+mod spt;
 mod stbpt;
 mod window_film;
 

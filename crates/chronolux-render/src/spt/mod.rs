@@ -89,6 +89,17 @@ pub enum Order {
     Scratch,
 }
 
+/// What re-shooting a queued group traces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Reshoot {
+    /// Every photon of the group (the paper).
+    Group,
+    /// Only the photons the path scan flagged (exact when `scan_paths` is on, which makes
+    /// the flags complete; with `scan_paths = false` whole groups are re-shot).
+    Flagged,
+}
+
 /// Settings of `spt`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -110,6 +121,9 @@ pub struct SptSettings {
     /// path touched a change or crosses the new bounds of a changed instance (complete:
     /// no stale group is missed). `false`: pilots only, as in the paper. Default true.
     pub scan_paths: bool,
+    /// What a queued group's re-shooting traces: `flagged` (only the photons the path
+    /// scan flagged) or `group` (all of them, as in the paper). Default `flagged`.
+    pub reshoot: Reshoot,
     /// Relative power difference at which a pilot's path counts as changed. Default 1e-4.
     pub path_tolerance: f32,
     /// Re-trace the whole pool after each update to count the pilots' misses (costly;
@@ -142,6 +156,7 @@ impl Default for SptSettings {
             budget_fraction: 0.25,
             budget_ms: 0.0,
             scan_paths: true,
+            reshoot: Reshoot::Flagged,
             path_tolerance: 1e-4,
             audit: false,
             spp: 16,

@@ -440,6 +440,8 @@ pub struct SptState {
     photons_in_solution: u64,
     /// Pilots per group (members `0 .. pilots` of each group).
     pub pilots: u64,
+    /// Per photon: the path scan found its stored path possibly stale.
+    flagged: Vec<bool>,
     /// Whether the pilots are current (traced in the current scene); false after a
     /// scratch restart.
     pilots_current: bool,
@@ -495,6 +497,7 @@ impl SptState {
             in_solution: vec![true; g],
             photons_in_solution: n,
             pilots,
+            flagged: vec![false; n as usize],
             pilots_current: true,
             queued: vec![false; g],
             key: vec![0.0; g],
@@ -582,6 +585,7 @@ impl SptState {
             st.rays += ps.rays;
             let tol = self.settings.path_tolerance;
             let mut change = vec![0.0f64; groups as usize];
+            let phi0 = self.flux_floor();
             let mut invalid = vec![false; groups as usize];
             for (&i, rec) in pilots.iter().zip(new) {
                 let g = self.layout.group_of(i) as usize;
@@ -591,7 +595,7 @@ impl SptState {
                     invalid[g] = true;
                 }
                 if differs {
-                    change[g] += self.perceived_change(old, &rec);
+                    change[g] += self.perceived_change(old, &rec, phi0);
                 }
                 if *old != rec {
                     // The pilot itself is brought up to date at once (also when it differs
@@ -611,21 +615,24 @@ impl SptState {
                 // into the queue too, with the change its removal makes as its weight.
                 let boxes = changed_instance_bounds(&self.scene, changes);
                 let z = self.records.len();
+                // Pilots are current already (traced above).
+                let first_non_pilot = (self.pilots * groups) as usize;
                 let hits = parallel::map_chunks(z, 4096, |r| {
                     r.filter(|&i| {
                         let rec = &self.records[i];
-                        rec.touches(changes) || rec.crosses(&boxes)
+                        i >= first_non_pilot && (rec.touches(changes) || rec.crosses(&boxes))
                     })
                     .collect::<Vec<usize>>()
                 });
                 let empty = PhotonRecord::default();
                 for i in hits.into_iter().flatten() {
+                    self.flagged[i] = true;
                     let g = i % groups as usize;
                     if !invalid[g] {
                         invalid[g] = true;
                         st.groups_by_scan += 1;
                     }
-                    change[g] += self.perceived_change(&self.records[i], &empty);
+                    change[g] += self.perceived_change(&self.records[i], &empty, phi0);
                 }
             }
             for g in 0..groups as usize {
@@ -665,12 +672,9 @@ impl SptState {
     /// finite), weighted by the side's screen coverage `c` in pixels of the coverage grid
     /// (`c₀ = 0.1`: sides off screen still count a little, their light reaches the screen
     /// by further bounces).
-    fn perceived_change(&self, old: &PhotonRecord, new: &PhotonRecord) -> f64 {
+    fn perceived_change(&self, old: &PhotonRecord, new: &PhotonRecord, phi0: f64) -> f64 {
         let mut out = 0.0;
         let sol = &self.solution;
-        let n_slots = sol.direct.flux.len().max(1) as f64;
-        let mean = self.photons_in_solution.max(1) as f64 * self.mean_photon_lum() / n_slots;
-        let phi0 = 0.01 * mean.max(1e-30);
         let mut one = |rec: &PhotonRecord, sign: f64| {
             for v in &rec.vertices {
                 if v.slot == NONE || v.kind == DIRECT {
@@ -687,13 +691,14 @@ impl SptState {
         out
     }
 
-    /// Mean luminance of a photon's deposits (Σ over all sides / photons).
-    fn mean_photon_lum(&self) -> f64 {
+    /// `Φ₀` of [`Self::perceived_change`]: 1 % of the mean flux sum per element side.
+    fn flux_floor(&self) -> f64 {
         let s = &self.solution;
-        let t: f64 = (0..s.direct.flux.len())
+        let n = s.direct.flux.len().max(1);
+        let t: f64 = (0..n)
             .map(|k| s.direct.lum(k) + s.indirect.lum(k) + s.caustic.lum(k))
             .sum();
-        t / self.photons_in_solution.max(1) as f64
+        (0.01 * t / n as f64).max(1e-30)
     }
 
     /// Queues `groups` for re-shooting (ahead of every queued group in priority order,
@@ -701,6 +706,9 @@ impl SptState {
     /// that knows better (a viewer's "refresh", tests).
     pub fn requeue(&mut self, groups: impl IntoIterator<Item = u64>) {
         for g in groups {
+            for m in 0..self.layout.members {
+                self.flagged[self.layout.photon(g, m) as usize] = true;
+            }
             let g = g as usize;
             self.queued[g] = true;
             self.key[g] = match self.settings.order {
@@ -731,9 +739,12 @@ impl SptState {
         let mut st = UpdateStats::default();
         let members = self.layout.members;
         let skip = if self.pilots_current { self.pilots } else { 0 };
-        let per_group = members - skip;
         let threads = rayon::current_num_threads() as u64;
         let n_groups = self.layout.groups;
+        // Only the flagged photons of a group when the flags are complete (path scan on,
+        // `reshoot = flagged`) and the group is in the solution; else the whole group.
+        let only_flagged =
+            self.settings.scan_paths && self.settings.reshoot == super::Reshoot::Flagged;
         loop {
             if self.queue.is_empty() {
                 break;
@@ -748,23 +759,31 @@ impl SptState {
             } else {
                 budget.photons.saturating_sub(st.photons_traced)
             };
-            let fit = if per_group == 0 {
-                self.queue.len() as u64
-            } else {
-                room / per_group
-            };
-            if fit == 0 {
+            // Whole groups in queue order, about 4096 photons per thread between time
+            // checks, never past the photon budget.
+            let mut groups: Vec<u32> = Vec::new();
+            let mut indices: Vec<u64> = Vec::new();
+            while let Some(&g) = self.queue.last() {
+                let gi = g as usize;
+                let before = indices.len();
+                for m in skip..members {
+                    let i = g as u64 + m * n_groups;
+                    if !only_flagged || !self.in_solution[gi] || self.flagged[i as usize] {
+                        indices.push(i);
+                    }
+                }
+                if indices.len() as u64 > room {
+                    indices.truncate(before);
+                    break;
+                }
+                groups.push(self.queue.pop().unwrap());
+                if indices.len() as u64 >= 4096 * threads {
+                    break;
+                }
+            }
+            if groups.is_empty() {
                 break;
             }
-            // Batches of about 4096 photons per thread between time checks.
-            let batch = fit
-                .min(self.queue.len() as u64)
-                .min((4096 * threads / per_group.max(1)).max(1)) as usize;
-            let groups: Vec<u32> = (0..batch).map(|_| self.queue.pop().unwrap()).collect();
-            let indices: Vec<u64> = groups
-                .iter()
-                .flat_map(|&g| (skip..members).map(move |m| (g as u64) + m * n_groups))
-                .collect();
             let (recs, ps) = trace_records(&self.scene, &self.mesh, &indices, self.settings.seed);
             st.rays += ps.rays;
             st.photons_traced += indices.len() as u64;
@@ -775,6 +794,7 @@ impl SptState {
                 }
                 self.solution.apply(&rec, 1.0);
                 self.records[i as usize] = rec;
+                self.flagged[i as usize] = false;
             }
             for &g in &groups {
                 let g = g as usize;

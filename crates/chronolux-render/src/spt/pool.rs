@@ -642,7 +642,7 @@ impl SptState {
                 st.groups_invalidated += 1;
                 let k = match self.settings.order {
                     Order::Random => {
-                        (hash_words(&[self.settings.seed, self.epoch, g as u64, 0x5350_54]) >> 11)
+                        (hash_words(&[self.settings.seed, self.epoch, g as u64, 0x0053_5054]) >> 11)
                             as f64
                     }
                     // A tiny floor keeps groups that touched a change without a visible
@@ -713,7 +713,7 @@ impl SptState {
             self.queued[g] = true;
             self.key[g] = match self.settings.order {
                 Order::Random => {
-                    (hash_words(&[self.settings.seed, self.epoch, g as u64, 0x5245_51]) >> 11)
+                    (hash_words(&[self.settings.seed, self.epoch, g as u64, 0x0052_4551]) >> 11)
                         as f64
                 }
                 _ => f64::MAX,

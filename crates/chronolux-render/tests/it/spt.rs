@@ -71,9 +71,9 @@ fn every_group_satisfies_equation_1_on_the_generated_points() {
                 }
             }
         }
-        for j in 0..6 {
+        for (j, sp) in spread.iter().enumerate() {
             if layout.exponents[j] > 0 {
-                assert!(spread[j] > 0.5, "dim {j}: spread {}", spread[j]);
+                assert!(*sp > 0.5, "dim {j}: spread {sp}");
             }
         }
     }

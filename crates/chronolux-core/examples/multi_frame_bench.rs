@@ -16,6 +16,7 @@ use chronolux_core::sampling::rng::Pcg32;
 use chronolux_core::sampling::warps::sample_uniform_sphere;
 use chronolux_core::scene::desc::AnimationId;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};
+use chronolux_core::scene::source::frame_time;
 use chronolux_core::scene::stage;
 use std::hint::black_box;
 use std::sync::Arc;
@@ -41,7 +42,7 @@ fn main() {
     .unwrap();
     let kmax = 8u32;
     let frames: Vec<FrameScene> = (centre - kmax..=centre + kmax)
-        .map(|g| b.build(g as f32 / fps))
+        .map(|g| b.build(frame_time(g, fps)))
         .collect();
     let mid = &frames[kmax as usize];
     let accept = |t, b1, b2| mid.accept(t, b1, b2);

@@ -21,7 +21,7 @@ pub fn max_component(c: Rgb) -> f32 {
     c.x.max(c.y).max(c.z)
 }
 
-/// sRGB electro-optical transfer: encoded value in [0,1] → linear.
+/// sRGB electro-optical transfer: encoded value in [0, 1] → linear.
 #[inline]
 pub fn srgb_to_linear(v: f32) -> f32 {
     if v <= 0.04045 {
@@ -31,7 +31,7 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
-/// sRGB opto-electronic transfer: linear → encoded value in [0,1] (input clamped).
+/// sRGB opto-electronic transfer: linear → encoded value in [0, 1] (input clamped).
 #[inline]
 pub fn linear_to_srgb(v: f32) -> f32 {
     let v = v.clamp(0.0, 1.0);

@@ -22,7 +22,8 @@
 //! ## Layers (a module may use those listed before it, never after)
 //! `math` → `color` → `stats` → `parallel` → `sampling` → `geometry` → `accel` → `texture`
 //! → `bsdf` → `material` → `scene::desc` → `scene::anim` → `light` → `camera` → `film`
-//! → `scene::frame` → `scene::testing`.
+//! → `scene::frame` → `scene::testing` → `testing` (the test harness: statistics, evidence
+//! images, external data; used by tests only).
 
 pub mod accel;
 pub mod bsdf;
@@ -38,4 +39,5 @@ pub mod parallel;
 pub mod sampling;
 pub mod scene;
 pub mod stats;
+pub mod testing;
 pub mod texture;

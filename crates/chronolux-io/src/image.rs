@@ -198,6 +198,88 @@ fn exr_to_io(e: exr::error::Error) -> io::Error {
     }
 }
 
+/// Writes the beauty as the `R`, `G`, `B` channels of a single-part OpenEXR file (what any
+/// viewer shows) plus named extra channels (render passes, e.g. `ViewLayer.Denoising
+/// Albedo.R`, Blender's multilayer naming `layer.pass.channel`), all 32-bit float,
+/// atomically. Each extra channel holds `width × height` values, row-major, top row first.
+pub fn write_exr_layers(
+    path: impl AsRef<Path>,
+    image: &Image,
+    extra: &[(String, Vec<f32>)],
+) -> Result<(), ImageError> {
+    use exr::prelude::{
+        AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, WritableImage,
+    };
+    let path = path.as_ref();
+    check_size(path, image)?;
+    let n = image.pixels.len();
+    let bad = |what: String| ImageError::Write {
+        path: path.to_owned(),
+        source: io::Error::new(io::ErrorKind::InvalidInput, what),
+    };
+    let mut list = Vec::with_capacity(3 + extra.len());
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let v: Vec<f32> = image.pixels.iter().map(|p| p[c]).collect();
+        list.push(AnyChannel::new(*name, FlatSamples::F32(v)));
+    }
+    for (name, v) in extra {
+        if v.len() != n {
+            return Err(bad(format!(
+                "channel {name} has {} values for {n} pixels",
+                v.len()
+            )));
+        }
+        if ["R", "G", "B"].contains(&name.as_str()) {
+            return Err(bad(format!("channel {name} would replace the beauty")));
+        }
+        list.push(AnyChannel::new(name.as_str(), FlatSamples::F32(v.clone())));
+    }
+    let channels = AnyChannels::sort(list.into());
+    let layer = Layer::new(
+        (image.width as usize, image.height as usize),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        channels,
+    );
+    let exr_image = exr::prelude::Image::from_layer(layer);
+    write_atomic(path, |w| {
+        exr_image.write().to_buffered(w).map_err(exr_to_io)
+    })
+    .map_err(|source| ImageError::Write {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// Reads one named channel of a single-part OpenEXR file as f32 values, row-major (for
+/// render passes written by [`write_exr_layers`]). `Ok(None)` when there is no such
+/// channel.
+pub fn read_exr_channel(
+    path: impl AsRef<Path>,
+    name: &str,
+) -> Result<Option<Vec<f32>>, ImageError> {
+    use exr::prelude::{ReadChannels, ReadLayers};
+    let path = path.as_ref();
+    let img = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|source| ImageError::Exr {
+            path: path.to_owned(),
+            source,
+        })?;
+    let ch = img
+        .layer_data
+        .channel_data
+        .list
+        .iter()
+        .find(|c| c.name.to_string() == name);
+    Ok(ch.map(|c| c.sample_data.values_as_f32().collect()))
+}
+
 /// Reads the first RGB(A) layer of an OpenEXR file (f16, f32 or u32 samples) as linear RGB;
 /// alpha is ignored. Reads files written by [`write_exr`] and by Mitsuba 3.
 pub fn read_exr(path: impl AsRef<Path>) -> Result<Image, ImageError> {

@@ -291,6 +291,8 @@ impl Manifest {
 #[derive(Clone, Debug)]
 pub struct FrameSink {
     dir: PathBuf,
+    /// File name of the manifest (`run.json`; a farm segment writes its own).
+    manifest: String,
 }
 
 impl FrameSink {
@@ -318,7 +320,15 @@ impl FrameSink {
         removed.map_err(unwritable)?;
         Ok(Self {
             dir: dir.to_owned(),
+            manifest: MANIFEST_NAME.to_string(),
         })
+    }
+
+    /// The same folder with the manifest written as `name` instead of `run.json` (farm
+    /// segments sharing one folder each keep their own, so none overwrites another's).
+    pub fn with_manifest_name(mut self, name: &str) -> Self {
+        self.manifest = name.to_string();
+        self
     }
 
     /// The output folder.
@@ -336,9 +346,9 @@ impl FrameSink {
         self.dir.join(frame_png_name(frame))
     }
 
-    /// `dir/run.json`.
+    /// `dir/run.json` (or the name given to [`FrameSink::with_manifest_name`]).
     pub fn manifest_path(&self) -> PathBuf {
-        self.dir.join(MANIFEST_NAME)
+        self.dir.join(&self.manifest)
     }
 
     /// True when both files of `frame` exist, the PNG ends with its `IEND` chunk, and the EXR

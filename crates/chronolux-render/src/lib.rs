@@ -1,8 +1,9 @@
 //! # chronolux-render
 //!
 //! Light transport. Single-frame integrators implement [`integrator::Integrator`]; the
-//! per-path logic of each estimator lives in one kernel ([`pt::PathTracer::li`] for path
-//! tracing) that temporal techniques call as their baselines do. Every technique is a
+//! per-path logic of each estimator lives in one kernel
+//! ([`RadianceEstimator::li`](integrator::RadianceEstimator::li) of [`pt::PathTracer`] for
+//! path tracing) that temporal techniques call as their baselines do. Every technique is a
 //! [`sequence::SequenceRenderer`] named once, in [`registry`] (name, summary, settings,
 //! capabilities, constructor); frame sequences go through [`run`], the one run loop that
 //! times frames and hands them to sinks (files, memory, progress), so baselines and
@@ -29,6 +30,7 @@
 //! - `stbpt`: spatio-temporal BDPT (Havran et al. 2003), each bidirectional sample reused
 //!   in the frames of a window around its own — [`temporal::stbpt`].
 
+pub mod aov;
 pub mod bdpt;
 pub mod dept;
 pub mod integrator;

@@ -34,7 +34,7 @@ use crate::integrator::{
 use crate::pt::PathTracer;
 use crate::sequence::SequenceRenderer;
 use chronolux_core::scene::frame::FrameScene;
-use chronolux_core::scene::source::FrameSource;
+use chronolux_core::scene::source::{FrameSource, frame_time};
 
 /// Largest number of instants a shutter interval is discretised into.
 pub const MAX_INSTANTS: u32 = 16;
@@ -42,7 +42,7 @@ pub const MAX_INSTANTS: u32 = 16;
 /// Instants (s) of a frame's shutter: the midpoints of `n` equal sub-intervals of
 /// `[t − S/(2·fps), t + S/(2·fps)]`, `t = frame / fps`.
 pub fn shutter_instants(frame: u32, fps: f32, shutter: f32, n: u32) -> Vec<f32> {
-    let t = frame as f32 / fps;
+    let t = frame_time(frame, fps);
     let open = shutter / fps;
     (0..n)
         .map(|j| t + open * ((j as f32 + 0.5) / n as f32 - 0.5))
@@ -207,4 +207,33 @@ pub fn render_with_splats_time_sampled<E: SplattingEstimator>(
 ) -> RenderedFrame {
     assert!(!scenes.is_empty(), "no scene in the shutter interval");
     splatting(est, Scenes::Shutter(scenes), frame, spp, seed, progress)
+}
+
+/// What the frame-by-frame camera-sample techniques (`path`, `bdpt`) can do: motion blur
+/// by time sampling, effort in samples per pixel.
+pub const FRAME_BY_FRAME_SPP: crate::registry::Capabilities = crate::registry::Capabilities {
+    motion_blur: true,
+    photons: false,
+    window: false,
+    stateless: true,
+    effort: crate::registry::Effort {
+        key: "spp",
+        per_unit: 1,
+        unit: "samples per pixel",
+    },
+};
+
+/// A frame-by-frame technique of `integrator`, time-sampled over the shutter when it is
+/// open ([`MotionBlur`]), else plain ([`crate::sequence::FrameByFrame`], which also renders
+/// progressive passes).
+pub fn frame_by_frame<I: ShutterIntegrator + 'static>(
+    integrator: I,
+    shutter: f32,
+    name: &'static str,
+) -> crate::registry::Renderer {
+    if shutter > 0.0 {
+        Box::new(MotionBlur::new(integrator, shutter))
+    } else {
+        Box::new(crate::sequence::FrameByFrame { integrator, name })
+    }
 }

@@ -199,29 +199,7 @@ impl Integrator for PathTracer {
 pub static TECHNIQUE: crate::registry::Preset<PathSettings> = crate::registry::Preset {
     name: "path",
     summary: "unidirectional path tracing with NEE and MIS, frame by frame (the reference)",
-    capabilities: crate::registry::Capabilities {
-        motion_blur: true,
-        photons: false,
-        window: false,
-        stateless: true,
-        effort: crate::registry::Effort {
-            key: "spp",
-            per_unit: 1,
-            unit: "samples per pixel",
-        },
-    },
+    capabilities: crate::motion_blur::FRAME_BY_FRAME_SPP,
     defaults: PathSettings::default,
-    build: |s, ctx, name| {
-        if ctx.shutter > 0.0 {
-            Box::new(crate::motion_blur::MotionBlur::new(
-                PathTracer::new(s),
-                ctx.shutter,
-            ))
-        } else {
-            Box::new(crate::sequence::FrameByFrame {
-                integrator: PathTracer::new(s),
-                name,
-            })
-        }
-    },
+    build: |s, ctx, name| crate::motion_blur::frame_by_frame(PathTracer::new(s), ctx.shutter, name),
 };

@@ -137,6 +137,61 @@ fn full_defaults<S: Serialize>(p: &Preset<S>) -> Value {
     serde_json::to_value((p.defaults)()).expect("settings serialise")
 }
 
+/// Which neighbouring frames a technique needs around the frames it outputs (what a
+/// farm segment must compute besides its own frames).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct FrameContext {
+    /// Frames before / after an output frame whose scenes (and, for windowed
+    /// techniques, samples) it uses.
+    pub before: u32,
+    pub after: u32,
+    /// The frames before must be *rendered*, in order (a stateful technique's history),
+    /// not only be present in the frame list.
+    pub render_before: bool,
+    /// With this context an output frame is bit-identical to the same frame of a single
+    /// run over the whole range (its samples depend only on seed, frame, pixel and index);
+    /// otherwise a segment's first frames start from a shorter history and the seam is
+    /// measured instead.
+    pub exact: bool,
+}
+
+/// Warm-up frames a stateful technique without a window gets at a segment's start.
+pub const STATEFUL_WARM_UP: u32 = 8;
+
+/// The [`FrameContext`] of `technique` with `settings`, from its capabilities: frame by
+/// frame needs nothing; a windowed technique needs its `window` (K) frames on each side
+/// (the frames enter the frame list and are traced as its window requires, exactly as in
+/// a single run); any other stateful technique gets [`STATEFUL_WARM_UP`] rendered frames
+/// of history, and is not exact.
+pub fn frame_context(technique: &dyn Technique, settings: &Value) -> FrameContext {
+    let c = technique.capabilities();
+    if c.stateless {
+        return FrameContext {
+            before: 0,
+            after: 0,
+            render_before: false,
+            exact: true,
+        };
+    }
+    let window = find_key(settings, "window")
+        .and_then(|k| k.split('.').try_fold(settings, |v, p| v.get(p)).cloned())
+        .and_then(|v| v.as_u64());
+    match (c.window, window) {
+        (true, Some(k)) => FrameContext {
+            before: k as u32,
+            after: k as u32,
+            render_before: false,
+            exact: true,
+        },
+        _ => FrameContext {
+            before: STATEFUL_WARM_UP,
+            after: 0,
+            render_before: true,
+            exact: false,
+        },
+    }
+}
+
 /// Every technique, in the order `--help` lists them.
 pub static TECHNIQUES: &[&dyn Technique] = &[
     &crate::pt::TECHNIQUE,

@@ -9,6 +9,7 @@
 //! resumed render skips complete ones), times each frame (wall and process CPU), and
 //! records the frame builder's statistics beside the technique's own report.
 
+use crate::aov::{self, Aovs, PassSet};
 use crate::integrator::RenderedFrame;
 use crate::sequence::{Flow, Pass, PassPlan, SequenceRenderer};
 use chronolux_core::scene::source::FrameSource;
@@ -32,6 +33,17 @@ pub struct FinishedFrame<'a> {
     /// Position in the run: `k` of `n` frames.
     pub k: usize,
     pub n: usize,
+    /// The render passes asked for in [`RunOptions::passes`] (`None` when none were).
+    pub aovs: Option<&'a Aovs>,
+}
+
+/// What the run loop makes besides the technique's frames.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunOptions {
+    /// Render passes of every frame ([`crate::aov`]), the same for every technique.
+    pub passes: PassSet,
+    /// Seed of the passes' sample streams.
+    pub seed: u64,
 }
 
 impl FinishedFrame<'_> {
@@ -119,7 +131,27 @@ pub fn run(
     sinks: &mut [&mut dyn FrameSink],
     cancel: Option<&AtomicBool>,
 ) -> Result<RunSummary, SinkError> {
-    drive(technique, source, frames, sinks, cancel, None)
+    drive(
+        technique,
+        source,
+        frames,
+        sinks,
+        cancel,
+        None,
+        RunOptions::default(),
+    )
+}
+
+/// [`run`] with options (render passes).
+pub fn run_with(
+    technique: &mut dyn SequenceRenderer,
+    source: &mut FrameSource,
+    frames: &[u32],
+    sinks: &mut [&mut dyn FrameSink],
+    cancel: Option<&AtomicBool>,
+    options: RunOptions,
+) -> Result<RunSummary, SinkError> {
+    drive(technique, source, frames, sinks, cancel, None, options)
 }
 
 /// [`run`] with every frame rendered as successive refinements
@@ -134,7 +166,15 @@ pub fn run_progressive(
     sinks: &mut [&mut dyn FrameSink],
     cancel: Option<&AtomicBool>,
 ) -> Result<RunSummary, SinkError> {
-    drive(technique, source, frames, sinks, cancel, Some(plan))
+    drive(
+        technique,
+        source,
+        frames,
+        sinks,
+        cancel,
+        Some(plan),
+        RunOptions::default(),
+    )
 }
 
 fn drive(
@@ -144,6 +184,7 @@ fn drive(
     sinks: &mut [&mut dyn FrameSink],
     cancel: Option<&AtomicBool>,
     plan: Option<PassPlan>,
+    options: RunOptions,
 ) -> Result<RunSummary, SinkError> {
     let (t0, c0) = (Instant::now(), cpu_seconds());
     let mut summary = RunSummary::default();
@@ -188,14 +229,31 @@ fn drive(
                 }
             }
         };
+        let wall_s = start.elapsed().as_secs_f64();
+        let aovs = options.passes.any().then(|| {
+            // Neighbours for motion: the frames before and after on the timeline.
+            let motion = options.passes.motion;
+            let prev = (motion && f > 0).then(|| source.frame(f - 1));
+            let next = motion.then(|| source.frame(f + 1));
+            let scene = source.frame(f);
+            aov::render_aovs(
+                &scene,
+                prev.as_deref(),
+                next.as_deref(),
+                f,
+                options.seed,
+                options.passes,
+            )
+        });
         let fin = FinishedFrame {
             frame: f,
             time_s: source.time(f),
-            wall_s: start.elapsed().as_secs_f64(),
+            wall_s,
             output: &out,
             build: serde_json::to_value(source.last_build).unwrap_or_default(),
             k,
             n,
+            aovs: aovs.as_ref(),
         };
         for s in sinks.iter_mut() {
             s.frame(&fin)?;

@@ -43,16 +43,20 @@ pub trait SequenceRenderer {
         on_pass: &mut dyn FnMut(&Pass) -> Flow,
     ) -> RenderedFrame {
         let _ = plan;
-        let out = self.render_frame(source, frame, progress);
-        on_pass(&Pass {
-            index: 0,
-            spp: 0,
-            total_spp: 0,
-            image: &out,
-            independent: false,
-        });
-        out
+        single_pass(self.render_frame(source, frame, progress), on_pass)
     }
+}
+
+/// A whole frame handed over as the one refinement of a technique that cannot refine.
+fn single_pass(out: RenderedFrame, on_pass: &mut dyn FnMut(&Pass) -> Flow) -> RenderedFrame {
+    on_pass(&Pass {
+        index: 0,
+        spp: 0,
+        total_spp: 0,
+        image: &out,
+        independent: false,
+    });
+    out
 }
 
 /// What a progressive consumer asks for: the samples per pixel of the first pair of
@@ -151,15 +155,7 @@ impl<I: Integrator> SequenceRenderer for FrameByFrame<I> {
         on_pass: &mut dyn FnMut(&Pass) -> Flow,
     ) -> RenderedFrame {
         if self.integrator.batch(1, 0, 0).is_none() {
-            let out = self.render_frame(source, frame, progress);
-            on_pass(&Pass {
-                index: 0,
-                spp: 0,
-                total_spp: 0,
-                image: &out,
-                independent: false,
-            });
-            return out;
+            return single_pass(self.render_frame(source, frame, progress), on_pass);
         }
         let scene = source.frame(frame);
         let mut batch = (plan.first_spp / 2).max(1);

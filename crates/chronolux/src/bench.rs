@@ -97,8 +97,8 @@ pub struct RaysArgs {
     /// Rays per set (hemi and box).
     #[arg(long, default_value_t = 1_000_000, value_name = "N")]
     pub rays: usize,
-    /// Write each ray set to DIR/<scene>_<set>.rays (little-endian f32 ox oy oz dx dy dz per
-    /// ray) with DIR/<scene>_<set>.json (our hit count and Σt), for other renderers.
+    /// Write each ray set to `DIR/<scene>_<set>.rays` (little-endian f32 ox oy oz dx dy dz
+    /// per ray) with `DIR/<scene>_<set>.json` (our hit count and Σt), for other renderers.
     #[arg(long, value_name = "DIR")]
     pub dump_rays: Option<PathBuf>,
 }
@@ -386,7 +386,7 @@ fn rays(a: RaysArgs) -> Result<()> {
     let pool = pool(tg.threads)?;
     let mut out = Vec::new();
     for t in targets(tg)? {
-        let time = tg.frame as f32 / tg.fps;
+        let time = chronolux_core::scene::source::frame_time(tg.frame, tg.fps);
         let (build, scene, tris) = pool.install(|| build_times(&t, time, tg.rounds))?;
         let sets = ray_sets(&scene, &tris, a.rays);
         let names = ["hemi", "box"];
@@ -499,7 +499,7 @@ fn build(a: BuildArgs) -> Result<()> {
     let pool = pool(tg.threads)?;
     let mut out = Vec::new();
     for t in targets(tg)? {
-        let time = tg.frame as f32 / tg.fps;
+        let time = chronolux_core::scene::source::frame_time(tg.frame, tg.fps);
         let (rec, _, _) = pool.install(|| build_times(&t, time, tg.rounds))?;
         out.push(json!({"scene": t.label, "source": t.source, "load_s": t.load_s, "build": rec}));
     }

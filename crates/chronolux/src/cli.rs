@@ -30,6 +30,15 @@ pub enum Command {
     Reference(crate::reference::ReferenceArgs),
     /// Measure speed: ray casting, BVH builds, path samples, equal-quality comparisons.
     Bench(crate::bench::BenchArgs),
+    /// Cut a render into segments for a farm: the frames each owns and the neighbouring
+    /// frames its technique needs (printed as JSON; `render --plan` runs a segment).
+    Plan(crate::farm::PlanArgs),
+    /// Write (and optionally submit) a farm job: `slurm` (sbatch job array) or `openjd`
+    /// (Open Job Description template for Deadline Cloud).
+    Farm(crate::farm::FarmArgs),
+    /// Check a farm render's folder: every frame present and readable, manifests merged
+    /// into run.json, preview written, seams between segments measured.
+    Assemble(crate::farm::AssembleArgs),
 }
 
 /// Which scene and how to present it; shared by every subcommand that loads a scene.
@@ -137,6 +146,28 @@ pub struct RenderArgs {
     /// Do not write the animated preview.
     #[arg(long)]
     pub no_preview: bool,
+    /// Render passes written as layers of each frame's EXR (Blender's multilayer names):
+    /// `albedo` (ViewLayer.Denoising Albedo), `normal` (ViewLayer.Denoising Normal, world
+    /// space), `depth` (ViewLayer.Depth, distance along the camera ray), `motion`
+    /// (ViewLayer.Vector: X,Y towards the previous frame, Z,W towards the next, in pixels,
+    /// +y down); presets `denoise` (albedo, normal) and `all`. The same for every method.
+    #[arg(long, value_name = "LIST")]
+    pub passes: Option<String>,
+    /// Denoise each frame with Intel Open Image Denoise (albedo and normal passes as
+    /// guides); the EXR's main image is the denoised one and the noisy one is kept as the
+    /// layer ViewLayer.Noisy Image. Needs a build with `--features oidn` (README).
+    #[arg(long)]
+    pub denoise: bool,
+    /// Render one segment of a farm plan (`chronolux plan`, `chronolux farm`): the plan
+    /// fixes every setting, so only --segment, --output, --threads, --resume and
+    /// --no-preview may be given with it.
+    #[arg(long, value_name = "PLAN.json", requires = "segment")]
+    pub plan: Option<PathBuf>,
+    /// Index of the segment of --plan to render (0-based): it computes the frames its
+    /// technique needs around its own and writes only its own frames, with its manifest
+    /// `run.segment-NNNN.json`.
+    #[arg(long, value_name = "I", requires = "plan")]
+    pub segment: Option<u32>,
 }
 
 #[derive(Args, Debug)]

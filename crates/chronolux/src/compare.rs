@@ -623,35 +623,20 @@ mod tests {
             .join(": ")
     }
 
-    /// Python with `flip_evaluator` (`CHRONOLUX_FLIP_PYTHON`, else `python3`), or `None`.
-    fn flip_python() -> Option<String> {
-        let py = std::env::var("CHRONOLUX_FLIP_PYTHON").unwrap_or_else(|_| "python3".into());
-        let ok = std::process::Command::new(&py)
-            .args(["-c", "import flip_evaluator"])
-            .output()
-            .is_ok_and(|o| o.status.success());
-        if !ok {
-            eprintln!(
-                "SKIPPED: `{py} -c \"import flip_evaluator\"` fails; install it \
-                 (`python3 -m pip install --user flip-evaluator`) or set CHRONOLUX_FLIP_PYTHON"
-            );
-        }
-        ok.then_some(py)
-    }
-
     /// Our FLIP means agree with flip-evaluator's to 1e-3 on the Mitsuba reference of the
     /// shared Cornell scene against deterministic noisy versions of it (EXRs both ways).
     #[test]
     fn flip_matches_flip_evaluator_on_mitsuba_reference() {
-        let refs = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/peers/mitsuba-refs");
-        let rp = refs.join("mitsuba_f00.exr");
-        if !rp.exists() {
-            eprintln!("SKIPPED: {} not found", rp.display());
+        use chronolux_core::testing::{flip_python, shared_file};
+        let (Some(rp), Some(other), Some(py)) = (
+            shared_file("peers/mitsuba-refs/mitsuba_f00.exr"),
+            shared_file("peers/mitsuba-refs/mitsuba_f24.exr"),
+            flip_python(),
+        ) else {
             return;
-        }
-        let Some(py) = flip_python() else { return };
+        };
         let r = read_exr(&rp).unwrap();
-        let other = read_exr(refs.join("mitsuba_f24.exr")).ok();
+        let other = read_exr(other).unwrap();
         let dir = tmp("flip-py");
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         let mut next = move || {
@@ -676,9 +661,7 @@ mod tests {
                 Image::from_pixels(r.width, r.height, px),
             ));
         }
-        if let Some(o) = other {
-            cases.push(("frame 24".into(), o));
-        }
+        cases.push(("frame 24".into(), other));
         let ppd = flip::default_ppd();
         for (name, t) in &cases {
             let tp = dir.join("t.exr");

@@ -38,6 +38,12 @@ pub struct RunConfig {
     pub shutter: f32,
     /// PNG/preview exposure in stops (the EXR is never altered).
     pub exposure: f32,
+    /// Render passes written as EXR layers.
+    #[serde(default)]
+    pub passes: chronolux_render::aov::PassSet,
+    /// Denoise with Open Image Denoise (needs the `oidn` build feature).
+    #[serde(default)]
+    pub denoise: bool,
 }
 
 /// A `--config` file: a `run.json` (its `settings` are a [`RunConfig`]), a `RunConfig`
@@ -63,6 +69,8 @@ pub struct PartialRun {
     pub frames: Option<Vec<u32>>,
     pub shutter: Option<f32>,
     pub exposure: Option<f32>,
+    pub passes: Option<chronolux_render::aov::PassSet>,
+    pub denoise: Option<bool>,
     /// Recorded in run.json but not part of the configuration (images do not depend on it).
     #[serde(default, rename = "threads")]
     pub _threads: Option<Value>,

@@ -4,6 +4,8 @@ mod bench;
 mod cli;
 mod compare;
 mod config;
+mod denoise;
+mod farm;
 mod info;
 mod quality;
 mod reference;
@@ -48,6 +50,9 @@ fn main() {
         cli::Command::Compare(c) => compare::run(c),
         cli::Command::Reference(r) => reference::run(r),
         cli::Command::Bench(b) => bench::run(b),
+        cli::Command::Plan(p) => farm::plan(p),
+        cli::Command::Farm(f) => farm::farm(f),
+        cli::Command::Assemble(a) => farm::assemble(a),
     };
     if let Err(e) = result {
         eprintln!("error: {}", one_line(&e));

@@ -10,6 +10,7 @@ use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
 use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::Image;
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
+use chronolux_render::aov::PassSet;
 use chronolux_render::registry::{self, BuildContext};
 use chronolux_render::run;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -107,6 +108,35 @@ pub fn default_resolution(desc: &SceneDesc, camera: &CameraChoice) -> (u32, u32)
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
+    if args.plan.is_some() || args.segment.is_some() {
+        return crate::farm::render_segment(args);
+    }
+    let (config, input) = resolve(&args)?;
+    execute(
+        &config,
+        input,
+        &Exec {
+            output: args.output.clone(),
+            resume: args.resume,
+            no_preview: args.no_preview,
+            threads: args.threads,
+            segment: None,
+        },
+    )
+}
+
+/// How to carry out a resolved configuration (nothing here changes the pixels).
+pub struct Exec {
+    pub output: std::path::PathBuf,
+    pub resume: bool,
+    pub no_preview: bool,
+    pub threads: Option<usize>,
+    /// A farm segment: only its own frames are written, with its own manifest.
+    pub segment: Option<crate::farm::SegmentRun>,
+}
+
+/// The configuration the flags (and `--config`) give, checked, and the scene loaded.
+pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)> {
     // Everything that can be checked without the scene is checked before loading it.
     let file = args.config.as_deref().map(ConfigFile::read).transpose()?;
     let prev = file.as_ref().map(ConfigFile::run).unwrap_or_default();
@@ -153,10 +183,18 @@ pub fn run(args: RenderArgs) -> Result<()> {
     flag("--max-depth", "max_depth", args.max_depth.map(Into::into));
     flag("--window", "window", args.window.map(Into::into));
     let sets = parse_sets(&args.set)?;
+    let passes = match &args.passes {
+        Some(p) => PassSet::parse(p).map_err(anyhow::Error::msg)?,
+        None => prev.passes.unwrap_or_default(),
+    };
+    let denoise = args.denoise || prev.denoise.unwrap_or(false);
+    if denoise && let Some(why) = crate::denoise::unavailable() {
+        bail!("{why}");
+    }
     let settings = technique_settings(tech, base.as_ref(), &flags, args.photons.as_deref(), &sets)?;
-    let ctx = BuildContext { shutter };
-    let mut renderer = tech.build(&settings, &ctx).map_err(anyhow::Error::msg)?;
-    set_threads(args.threads)?;
+    // Built once here so that a bad combination fails before the scene is loaded.
+    tech.build(&settings, &BuildContext { shutter })
+        .map_err(anyhow::Error::msg)?;
     let requested_frames = match args.frames.as_deref() {
         Some(f) => Some(parse_frames(f)?),
         None => prev.frames.clone(),
@@ -176,7 +214,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
         stage: args.scene.stage.clone().or(prev.stage.clone()),
     };
     let input = scene_input::load(&scene_args)?;
-    let summary = info::summarize(&input);
     let last = last_frame(&input.desc, input.animation, fps);
     let frames = match requested_frames {
         Some(f) => f,
@@ -227,26 +264,76 @@ pub fn run(args: RenderArgs) -> Result<()> {
         frames: frames.clone(),
         shutter,
         exposure,
+        passes,
+        denoise,
     };
-    let sink = FrameSink::create(&args.output)?;
+    Ok((config, input))
+}
+
+/// Renders `config` (its scene already loaded as `input`) into `exec.output`.
+pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) -> Result<()> {
+    let tech = registry::find(&config.method).map_err(anyhow::Error::msg)?;
+    let mut renderer = tech
+        .build(
+            &config.technique,
+            &BuildContext {
+                shutter: config.shutter,
+            },
+        )
+        .map_err(anyhow::Error::msg)?;
+    set_threads(exec.threads)?;
+    let summary = info::summarize(&input);
+    let [w, h] = config.resolution;
+    let fps = config.fps;
+    // A segment computes its warm-up and cool-down frames too, and writes only its own.
+    let (source_frames, run_frames) = match &exec.segment {
+        Some(seg) => (seg.compute.clone(), seg.run_frames()),
+        None => (config.frames.clone(), config.frames.clone()),
+    };
+    let frames = run_frames;
+    let mut sink = FrameSink::create(&exec.output)?;
+    if let Some(seg) = &exec.segment {
+        sink = sink.with_manifest_name(&seg.manifest_name());
+    }
     let desc = Arc::new(input.desc);
     let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
-    let mut source = FrameSource::new(builder, fps, frames.clone());
+    let mut source = FrameSource::new(builder, fps, source_frames);
 
-    let mut settings_json = serde_json::to_value(&config)?;
+    let mut settings_json = serde_json::to_value(config)?;
     settings_json["threads"] = rayon::current_num_threads().into();
     let mut manifest = Manifest::new(
         std::env::args().collect(),
         settings_json,
         serde_json::to_value(&summary)?,
     );
-    if args.resume
+    if let Some(seg) = &exec.segment {
+        settings_json_segment(&mut manifest.settings, seg);
+    }
+    if exec.resume
         && let Some(earlier) = sink.read_manifest()?
     {
-        check_resumable(&earlier.settings, &manifest.settings, &args.output)?;
+        check_resumable(&earlier.settings, &manifest.settings, &exec.output)?;
         manifest.merge_earlier(&earlier);
     }
 
+    // A denoised frame needs its albedo and normal.
+    let passes = if config.denoise {
+        config
+            .passes
+            .with(PassSet::parse("denoise").expect("preset"))
+    } else {
+        config.passes
+    };
+    let options = run::RunOptions {
+        passes,
+        seed: registry::find_key(&config.technique, "seed")
+            .and_then(|k| {
+                k.split('.')
+                    .try_fold(&config.technique, |v, p| v.get(p))
+                    .and_then(|v| v.as_u64())
+            })
+            .unwrap_or(0),
+    };
     let progress = Progress::new(w, h, frames.len());
     progress.say(format!(
         "rendering {} frame(s) of {} at {w}x{h}, method {}, {} thread(s) into {}",
@@ -254,21 +341,29 @@ pub fn run(args: RenderArgs) -> Result<()> {
         input.source,
         renderer.name(),
         rayon::current_num_threads(),
-        args.output.display()
+        exec.output.display()
     ));
     let mut disk = DiskSink {
         sink: &sink,
         manifest,
-        exposure,
-        resume: args.resume,
+        exposure: config.exposure,
+        resume: exec.resume,
+        denoise: config.denoise,
+        keep_passes: config.passes,
+        owned: exec.segment.as_ref().map(|s| s.owned.clone()),
+        warm_up_until: exec
+            .segment
+            .as_ref()
+            .and_then(|s| s.warm_up_until(&sink, exec.resume)),
     };
     let mut progress = progress;
-    let result = chronolux_render::run::run(
+    let result = chronolux_render::run::run_with(
         renderer.as_mut(),
         &mut source,
         &frames,
         &mut [&mut disk, &mut progress],
         None,
+        options,
     );
     // The bars are cleared whatever happens, so that an error line is not drawn over.
     progress.clear();
@@ -279,8 +374,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
         .filter(|f| summary.rendered.contains(f) || summary.skipped.contains(f))
         .collect();
     written.dedup();
-    if !args.no_preview && written.len() > 1 {
-        match chronolux_io::output::write_preview(&args.output, &written, fps) {
+    let written: Vec<u32> = match &exec.segment {
+        Some(seg) => written
+            .into_iter()
+            .filter(|f| seg.owned.contains(f))
+            .collect(),
+        None => written,
+    };
+    // A segment's frames are previewed when the farm's frames are assembled.
+    if !exec.no_preview && exec.segment.is_none() && written.len() > 1 {
+        match chronolux_io::output::write_preview(&exec.output, &written, fps) {
             Ok(p) => progress.say(format!("preview: {}", p.display())),
             Err(e) => eprintln!("warning: no preview written: {e}"),
         }
@@ -289,7 +392,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         "done: {} frame(s) in {:.1} s → {}",
         written.len(),
         summary.wall_s,
-        args.output.display()
+        exec.output.display()
     ));
     Ok(())
 }
@@ -301,23 +404,68 @@ pub struct DiskSink<'a> {
     pub exposure: f32,
     /// Frames already complete in the folder are not needed again.
     pub resume: bool,
+    /// A farm segment's own frames (the others are computed, not written).
+    pub owned: Option<Vec<u32>>,
+    /// A stateful technique's segment renders (without writing) every frame before this
+    /// one: its history.
+    pub warm_up_until: Option<u32>,
+    /// Denoise the beauty (the noisy one becomes a layer).
+    pub denoise: bool,
+    /// The passes the user asked for (a denoised render computes albedo and normal even
+    /// when they were not asked for, and does not write them then).
+    pub keep_passes: PassSet,
 }
 
 impl run::FrameSink for DiskSink<'_> {
     fn needs(&self, frame: u32) -> bool {
+        let own = self.owned.as_ref().is_none_or(|o| o.contains(&frame));
+        if !own {
+            return self.warm_up_until.is_some_and(|u| frame < u);
+        }
         !(self.resume && self.sink.is_complete(frame))
     }
 
     fn frame(&mut self, f: &run::FinishedFrame) -> Result<(), run::SinkError> {
+        if self.owned.as_ref().is_some_and(|o| !o.contains(&f.frame)) {
+            return Ok(()); // a warm-up frame: computed for its history only
+        }
         let out = f.output;
-        let image = Image {
+        let mut image = Image {
             width: out.width,
             height: out.height,
             pixels: out.pixels.clone(),
         };
-        self.sink
-            .write_frame(f.frame, &image, self.exposure)
-            .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+        match f.aovs {
+            None => self
+                .sink
+                .write_frame(f.frame, &image, self.exposure)
+                .map_err(|e| format!("writing frame {}: {e}", f.frame))?,
+            Some(aovs) => {
+                let mut kept = aovs.clone();
+                if !self.keep_passes.albedo {
+                    kept.albedo.clear();
+                }
+                if !self.keep_passes.normal {
+                    kept.normal.clear();
+                }
+                let mut layers = crate::denoise::pass_channels(&kept);
+                if self.denoise {
+                    let clean = crate::denoise::denoise(&image.pixels, aovs)
+                        .map_err(|e| format!("frame {}: {e}", f.frame))?;
+                    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                        layers.push((
+                            format!("ViewLayer.Noisy Image.{name}"),
+                            image.pixels.iter().map(|p| p[c]).collect(),
+                        ));
+                    }
+                    image.pixels = clean;
+                }
+                chronolux_io::image::write_exr_layers(self.sink.exr_path(f.frame), &image, &layers)
+                    .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+                chronolux_io::image::write_png(self.sink.png_path(f.frame), &image, self.exposure)
+                    .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+            }
+        }
         self.manifest
             .upsert_frame(FrameRecord::new(f.frame, f.time_s, f.wall_s, f.record()));
         self.sink.write_manifest(&self.manifest)?;
@@ -428,6 +576,15 @@ impl run::FrameSink for Progress {
     }
 }
 
+/// Records in a segment's manifest which segment it is.
+fn settings_json_segment(settings: &mut serde_json::Value, seg: &crate::farm::SegmentRun) {
+    settings["segment"] = serde_json::json!({
+        "index": seg.index,
+        "owned": seg.owned,
+        "compute": seg.compute,
+    });
+}
+
 /// `--resume` continues a run only with the settings that made its frames: mixing frames of
 /// different sample counts, sizes or cameras in one sequence would be silently wrong.
 fn check_resumable(
@@ -442,6 +599,8 @@ fn check_resumable(
         "fps",
         "shutter",
         "exposure",
+        "passes",
+        "denoise",
         "animation",
         "camera",
         "stage",

@@ -53,6 +53,9 @@ use crate::math::{Frame, Vec2, Vec3, refract};
 use microfacet::{Ggx, MIN_ALPHA};
 use std::f32::consts::FRAC_1_PI;
 
+/// GGX α below which a specular lobe is *near-specular* ([`Bsdf::near_specular`]).
+pub const NEAR_SPECULAR_ALPHA: f32 = 0.1;
+
 /// Which quantity is transported along the path: radiance (camera paths) or importance
 /// (light paths, photons). Shading normals make the BSDF non-symmetric; the correction is
 /// applied by [`Bsdf`] for `Importance`.
@@ -360,6 +363,20 @@ impl Bsdf {
                 ..Default::default()
             },
         }
+    }
+
+    /// True when the BSDF has a specular lobe (the dielectric's specular layer, metal or
+    /// transmission, with non-zero weight) whose GGX α is below [`NEAR_SPECULAR_ALPHA`]
+    /// (deltas, α < [`MIN_ALPHA`], included). Such a lobe is narrow: a direction sampled
+    /// from it for one view direction `wo` is where `f(wo, ·)` peaks, and for another view
+    /// `wo'` the weight `f(wo', wi)/pdf(wo, wi)` has a huge variance. Techniques that reuse
+    /// a direction sampled for one view with another view (stbpt's reuse when the camera
+    /// moves) must not do it at such a surface. A property of the lobes only: independent
+    /// of the shading frame and of any direction.
+    pub fn near_specular(&self) -> bool {
+        let lo = &self.lobes;
+        (lo.specular_weight > 0.0 || lo.metal_weight > 0.0 || lo.transmission_weight > 0.0)
+            && lo.alpha < NEAR_SPECULAR_ALPHA
     }
 
     /// True if some lobe is not a delta distribution (light sampling can help).

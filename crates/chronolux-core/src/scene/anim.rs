@@ -1,23 +1,12 @@
 //! Animation evaluation at any time `t`: keyframe channels (STEP, LINEAR with slerp for
 //! rotations, CUBICSPLINE), the resulting node pose, and per-frame vertex deformation by
-//! morph targets and linear blend skinning (on the CPU).
+//! morph targets and linear blend skinning (on the CPU). Which time a frame shows is
+//! [`frame_time`](super::source::frame_time)'s business.
 
 use super::desc::{
     AnimationId, Channel, ChannelTarget, Interpolation, NodeId, Primitive, SceneDesc, Trs,
 };
 use crate::math::{Mat3, Mat4, Quat, Vec3, Vec4};
-
-/// Frame timing of an animation: frame `f` is shown at time `f / fps`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Timeline {
-    pub fps: f32,
-}
-
-impl Timeline {
-    pub fn time_of(&self, frame: u32) -> f32 {
-        frame as f32 / self.fps
-    }
-}
 
 /// Evaluates one channel at time `t` (seconds); returns `channel.components` values.
 /// Before the first key the first value holds, after the last key the last (glTF rule).

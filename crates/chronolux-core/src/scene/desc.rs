@@ -168,7 +168,7 @@ pub enum WrapMode {
 }
 
 /// A decoded 8-bit RGBA image with its sampler settings.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Texture {
     pub name: String,
     pub width: u32,
@@ -187,8 +187,8 @@ pub struct TextureRef {
     pub texture: TextureId,
     /// 0 = TEXCOORD_0, 1 = TEXCOORD_1.
     pub uv_set: u32,
-    /// KHR_texture_transform as a 2×3 affine map applied to the UV (column-major: uv' =
-    /// m[0]*u + m[1]*v + m[2]); identity when absent.
+    /// KHR_texture_transform as a 2×3 affine map applied to the UV (column-major:
+    /// `uv' = m[0]*u + m[1]*v + m[2]`); identity when absent.
     pub transform: [Vec2; 3],
 }
 
@@ -221,7 +221,7 @@ pub enum AlphaMode {
 
 /// A glTF metallic-roughness material with the extensions Chronolux supports.
 /// Colours are linear. Textures multiply their factors (glTF rule).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Material {
     pub name: String,
     /// Linear RGB base colour factor.

@@ -1,7 +1,9 @@
 //! Scenes: the plain description ([`desc`]), animation evaluation ([`anim`]), the
-//! render-ready frame ([`frame`]) and scenes built in code for tests ([`testing`]).
+//! render-ready frame ([`frame`]), what changed between frames ([`delta`]) and scenes built
+//! in code for tests ([`testing`]).
 
 pub mod anim;
+pub mod delta;
 pub mod desc;
 pub mod frame;
 pub mod generated;

@@ -8,9 +8,17 @@
 //! for, and keeps the last few built frames (least recently used first out), so a window
 //! sliding by one frame builds one new scene, not 2K + 1.
 
+use super::delta::FrameDelta;
 use super::frame::{BuildStats, FrameBuilder, FrameScene};
 use std::collections::VecDeque;
 use std::sync::Arc;
+
+/// Time (s) at which frame `frame` is shown at `fps` frames per second: `frame / fps`.
+/// The one frame-to-time mapping ([`FrameSource::time`] uses it; so should everything that
+/// needs a frame's time without a source).
+pub fn frame_time(frame: u32, fps: f32) -> f32 {
+    frame as f32 / fps
+}
 
 /// Scenes of the frames of one animation clip at one frame rate.
 pub struct FrameSource {
@@ -49,9 +57,9 @@ impl FrameSource {
         self.fps
     }
 
-    /// Time (s) of frame `f`.
+    /// Time (s) of frame `f` ([`frame_time`]).
     pub fn time(&self, f: u32) -> f32 {
-        f as f32 / self.fps
+        frame_time(f, self.fps)
     }
 
     /// The frames to be rendered, increasing.
@@ -99,6 +107,24 @@ impl FrameSource {
         self.last_build = self.builder.last_build;
         self.builds += 1;
         s
+    }
+
+    /// What changes anywhere in the segment of `frames` (increasing): [`FrameDelta::over`]
+    /// their scenes, built through the cache two at a time (a segment longer than the
+    /// cache capacity is not held in memory at once).
+    pub fn delta_over(&mut self, frames: &[u32]) -> FrameDelta {
+        let mut delta = FrameDelta::default();
+        let mut prev: Option<Arc<FrameScene>> = None;
+        for &f in frames {
+            let s = self.frame(f);
+            let d = match &prev {
+                Some(p) => FrameDelta::between(p, &s),
+                None => FrameDelta::between(&s, &s),
+            };
+            delta.merge(&d);
+            prev = Some(s);
+        }
+        delta
     }
 
     /// The builder (scene description, geometry count).

@@ -135,7 +135,7 @@ fn chi2_sampling_matches_pdf_and_pdf_is_normalised() {
         ));
     }
     // Šidák correction: family-wise false-alarm rate 1% over all configurations.
-    let threshold = 1.0 - (1.0f64 - 0.01).powf(1.0 / configs.len() as f64);
+    let threshold = chronolux_core::testing::stats::sidak(0.01, configs.len());
     let mut failures = Vec::new();
     for (k, (name, bsdf, wo)) in configs.iter().enumerate() {
         let r = chi2_fit(bsdf, *wo, 1_000_000, k as u64);

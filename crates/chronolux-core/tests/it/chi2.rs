@@ -185,12 +185,6 @@ pub fn pooled_p_value(obs: &[f64], exp: &[f64], extra: Option<(f64, f64)>) -> f6
     gamma_q(dof as f64 / 2.0, chsq / 2.0)
 }
 
-/// Šidák-corrected per-test threshold for a family-wise false-alarm rate `alpha` over
-/// `tests` tests.
-pub fn sidak(alpha: f64, tests: usize) -> f64 {
-    1.0 - (1.0 - alpha).powf(1.0 / tests as f64)
-}
-
 /// A histogram over the directions of the spherical cap {w : w·axis ≥ z_min}, in cells
 /// equal in solid angle: `n_cos` rows uniform in w·axis, `n_phi` columns uniform in
 /// azimuth. With `z_min = −1` it is the whole sphere.

@@ -3,13 +3,14 @@
 //! `power` against numerical integration of the emission, and irradiance from a triangle
 //! light against Lambert's closed form for polygons.
 
-use crate::chi2::{CapGrid, pooled_p_value, sidak};
+use crate::chi2::{CapGrid, pooled_p_value};
 use chronolux_core::accel::TriRef;
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::light::spherical::use_solid_angle_sampling;
 use chronolux_core::light::{Light, spot_falloff};
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::sampling::rng::Pcg32;
+use chronolux_core::testing::stats::sidak;
 use glam::DVec3;
 use std::f64::consts::PI;
 

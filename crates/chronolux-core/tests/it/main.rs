@@ -2,5 +2,6 @@
 
 mod bsdf;
 mod chi2;
+mod delta;
 mod light;
 mod metrics;

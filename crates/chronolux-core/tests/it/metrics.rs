@@ -112,26 +112,6 @@ fn default_ppd_matches_flip() {
     assert!((flip::default_ppd() - 67.020_645).abs() < 1e-4);
 }
 
-/// Python with `flip_evaluator`: `CHRONOLUX_FLIP_PYTHON`, else `python3`; `None` (and a
-/// message) when it cannot import the package.
-fn flip_python() -> Option<String> {
-    let py = std::env::var("CHRONOLUX_FLIP_PYTHON").unwrap_or_else(|_| "python3".into());
-    let ok = std::process::Command::new(&py)
-        .args(["-c", "import flip_evaluator"])
-        .output()
-        .map(|o| o.status.success())
-        .unwrap_or(false);
-    if ok {
-        Some(py)
-    } else {
-        eprintln!(
-            "SKIPPED: `{py} -c \"import flip_evaluator\"` fails; install it \
-             (`python3 -m pip install --user flip-evaluator`) or set CHRONOLUX_FLIP_PYTHON"
-        );
-        None
-    }
-}
-
 fn write_raw(path: &std::path::Path, img: &[Rgb]) {
     let mut bytes = Vec::with_capacity(img.len() * 12);
     for c in img {
@@ -178,7 +158,9 @@ fn python_flip(py: &str, r: &[Rgb], t: &[Rgb], w: usize, h: usize, mode: &str) -
 
 #[test]
 fn flip_agrees_with_flip_evaluator() {
-    let Some(py) = flip_python() else { return };
+    let Some(py) = chronolux_core::testing::flip_python() else {
+        return;
+    };
     let (w, h) = (96, 80);
     let r = scene(w, h);
     let pairs = [

@@ -7,8 +7,6 @@ use chronolux_io::image::{
     Image, ImageError, read_exr, read_png_rgb8, tonemap_srgb8, write_exr, write_png,
 };
 
-const MITSUBA_F00: &str = "/work/shared/peers/mitsuba-refs/mitsuba_f00.exr";
-
 /// A fresh, unique folder under the system temp dir.
 pub fn temp_dir(name: &str) -> PathBuf {
     use std::sync::atomic::{AtomicU32, Ordering};
@@ -134,15 +132,16 @@ fn exr_read_errors_name_the_file() {
 
 #[test]
 fn reads_mitsuba_reference() {
-    if !Path::new(MITSUBA_F00).exists() {
-        eprintln!("skipped: {MITSUBA_F00} not present");
+    let Some(path) = chronolux_core::testing::shared_file("peers/mitsuba-refs/mitsuba_f00.exr")
+    else {
         return;
-    }
-    let img = read_exr(MITSUBA_F00).unwrap();
+    };
+    let img = read_exr(&path).unwrap();
     assert_eq!((img.width, img.height), (256, 256));
     let mean = img.mean_value();
     eprintln!(
-        "{MITSUBA_F00}: mean pixel value {mean}, per channel {}",
+        "{}: mean pixel value {mean}, per channel {}",
+        path.display(),
         img.mean()
     );
     assert!(

@@ -246,7 +246,7 @@ pub fn generate_camera_subpath_with<T: FnMut(&Ray) -> Option<Hit>>(
 }
 
 /// Generates a light subpath into `path` (cleared): a light chosen in proportion to power,
-/// a ray from [`Light::sample_le`], then up to `max_depth − 1` surface vertices traced in
+/// a ray from [`Light::sample_le`](chronolux_core::light::Light::sample_le), then up to `max_depth − 1` surface vertices traced in
 /// importance mode (the BSDF applies the adjoint shading-normal correction).
 ///
 /// ## Estimator contract
@@ -418,29 +418,7 @@ impl Integrator for Bdpt {
 pub static TECHNIQUE: crate::registry::Preset<BdptSettings> = crate::registry::Preset {
     name: "bdpt",
     summary: "bidirectional path tracing, all strategies with MIS, frame by frame",
-    capabilities: crate::registry::Capabilities {
-        motion_blur: true,
-        photons: false,
-        window: false,
-        stateless: true,
-        effort: crate::registry::Effort {
-            key: "spp",
-            per_unit: 1,
-            unit: "samples per pixel",
-        },
-    },
+    capabilities: crate::motion_blur::FRAME_BY_FRAME_SPP,
     defaults: BdptSettings::default,
-    build: |s, ctx, name| {
-        if ctx.shutter > 0.0 {
-            Box::new(crate::motion_blur::MotionBlur::new(
-                Bdpt::new(s),
-                ctx.shutter,
-            ))
-        } else {
-            Box::new(crate::sequence::FrameByFrame {
-                integrator: Bdpt::new(s),
-                name,
-            })
-        }
-    },
+    build: |s, ctx, name| crate::motion_blur::frame_by_frame(Bdpt::new(s), ctx.shutter, name),
 };

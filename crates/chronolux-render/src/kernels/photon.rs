@@ -9,8 +9,8 @@
 //! | dimension (base) | decision |
 //! | --- | --- |
 //! | 0 (2) | light choice *and* first coordinate of the point on the light (see below) |
-//! | 1 (3) | second coordinate of the point on the light ([`Light::sample_le`] `u_pos.y`) |
-//! | 2, 3 (5, 7) | emitted direction ([`Light::sample_le`] `u_dir`) |
+//! | 1 (3) | second coordinate of the point on the light ([`Light::sample_le`](chronolux_core::light::Light::sample_le) `u_pos.y`) |
+//! | 2, 3 (5, 7) | emitted direction ([`Light::sample_le`](chronolux_core::light::Light::sample_le) `u_dir`) |
 //! | 4 + 4b, 5 + 4b | bounce b: BSDF direction (bounce 0: bases 11, 13) |
 //! | 6 + 4b | bounce b: BSDF lobe |
 //! | 7 + 4b | bounce b: Russian roulette |

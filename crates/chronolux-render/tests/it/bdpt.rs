@@ -3,7 +3,6 @@
 //! bit-identical images across thread counts.
 
 use crate::frame0;
-use crate::peer::normal_quantile;
 use chronolux_core::color::Rgb;
 use chronolux_core::math::{Quat, Vec3};
 use chronolux_core::scene::desc::{
@@ -11,6 +10,7 @@ use chronolux_core::scene::desc::{
 };
 use chronolux_core::scene::stage;
 use chronolux_core::scene::testing::furnace;
+use chronolux_core::testing::{Estimate, block_z_test, channel_means};
 use chronolux_render::bdpt::{Bdpt, BdptSettings, MisHeuristic};
 use chronolux_render::integrator::{Integrator, RenderedFrame};
 use chronolux_render::pt::{PathSettings, PathTracer};
@@ -90,52 +90,25 @@ fn furnace_bdpt_depth_limit_follows_mitsuba_convention() {
 /// standard errors of their difference; (2) per-block z-test on 8×8-pixel blocks with
 /// Šidák correction at family level 1 % (as peer.rs).
 fn assert_agree(a: &RenderedFrame, b: &RenderedFrame, what: &str) {
-    let (w, h) = (a.width, a.height);
-    let n = (w * h) as f64;
-    for c in 0..3 {
-        let ma: f64 = a.pixels.iter().map(|p| p[c] as f64).sum::<f64>() / n;
-        let mb: f64 = b.pixels.iter().map(|p| p[c] as f64).sum::<f64>() / n;
-        let va: f64 = a.variance.iter().map(|v| v[c] as f64).sum::<f64>() / (n * n);
-        let vb: f64 = b.variance.iter().map(|v| v[c] as f64).sum::<f64>() / (n * n);
-        let se = (va + vb).sqrt();
+    let ea = Estimate::new(a.width, a.height, &a.pixels, &a.variance);
+    let eb = Estimate::new(b.width, b.height, &b.pixels, &b.variance);
+    for (c, m) in channel_means(&ea, &eb).iter().enumerate() {
         assert!(
-            (ma - mb).abs() < 5.0 * se,
-            "{what}: channel {c}: {ma:.5} vs {mb:.5} (se {se:.2e}, z {:.2})",
-            (ma - mb).abs() / se
+            (m.a - m.b).abs() < 5.0 * m.se,
+            "{what}: channel {c}: {:.5} vs {:.5} (se {:.2e}, z {:.2})",
+            m.a,
+            m.b,
+            m.se,
+            m.z()
         );
         eprintln!(
-            "{what}: channel {c}: {ma:.5} vs {mb:.5}, z = {:.2}",
-            (ma - mb).abs() / se
+            "{what}: channel {c}: {:.5} vs {:.5}, z = {:.2}",
+            m.a,
+            m.b,
+            m.z()
         );
     }
-    let bs = 8u32;
-    let blocks = (w / bs) * (h / bs) * 3;
-    let alpha = 1.0 - (1.0f64 - 0.01).powf(1.0 / blocks as f64);
-    let z_crit = normal_quantile(1.0 - alpha / 2.0);
-    let mut worst = 0.0f64;
-    for by in 0..h / bs {
-        for bx in 0..w / bs {
-            for c in 0..3 {
-                let (mut d, mut v) = (0.0f64, 0.0f64);
-                for y in by * bs..(by + 1) * bs {
-                    for x in bx * bs..(bx + 1) * bs {
-                        let i = (y * w + x) as usize;
-                        d += a.pixels[i][c] as f64 - b.pixels[i][c] as f64;
-                        v += a.variance[i][c] as f64 + b.variance[i][c] as f64;
-                    }
-                }
-                if v > 0.0 {
-                    let z = d.abs() / v.sqrt();
-                    worst = worst.max(z);
-                    assert!(
-                        z < z_crit,
-                        "{what}: block ({bx},{by}) channel {c}: z = {z:.2} ≥ {z_crit:.2}"
-                    );
-                }
-            }
-        }
-    }
-    eprintln!("{what}: worst block z = {worst:.2} (critical {z_crit:.2})");
+    block_z_test(&ea, &eb, 8, 0.01).assert_passes(what);
 }
 
 /// The demo (area light, glass sphere: caustics; rough metal sphere; glossy cube): BDPT

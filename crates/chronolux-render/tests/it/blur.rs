@@ -283,7 +283,7 @@ fn moving_quad() -> chronolux_core::scene::desc::SceneDesc {
 /// The moving quad seen through the orthographic camera, or through a perspective one
 /// with tan(yfov/2) = 0.5: on the quad's plane z = −1 both map x ∈ [−8, 8] to raster
 /// [0, 64] linearly, so the analytic profile is the same.
-fn moving_quad_seen(orthographic: bool) -> chronolux_core::scene::desc::SceneDesc {
+pub(crate) fn moving_quad_seen(orthographic: bool) -> chronolux_core::scene::desc::SceneDesc {
     let quad = Primitive {
         positions: vec![
             Vec3::new(-1.0, -2.0, -1.0),

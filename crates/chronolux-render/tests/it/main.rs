@@ -1,11 +1,14 @@
 //! The one integration-test binary of chronolux-render: integrators on scenes with
 //! derivable answers.
 
+mod aov;
 mod bdpt;
 mod blur;
+mod delta;
 mod dept;
 mod determinism;
 mod furnace;
+mod matrix;
 mod multi_frame;
 mod peer;
 mod photon;

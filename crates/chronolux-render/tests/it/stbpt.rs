@@ -11,9 +11,9 @@
 //! null hypothesis (block means of independent renders are iid and, over 64 pixels, close
 //! to normal). Šidák correction at family level 1 % over blocks × channels.
 
-use crate::peer::normal_quantile;
 use crate::source;
 use chronolux_core::scene::stage;
+use chronolux_core::testing::{Estimate, block_t_test};
 use chronolux_render::bdpt::{Bdpt, BdptSettings};
 use chronolux_render::integrator::{Integrator, RenderedFrame};
 use chronolux_render::sequence::{ReuseStats, SequenceRenderer};
@@ -72,86 +72,12 @@ fn bdpt_reference(
     .render(&scene, f, &|_| {})
 }
 
-/// Upper `p` quantile of Student's t with `nu` degrees of freedom, Cornish–Fisher
-/// expansion in 1/ν to third order (Abramowitz & Stegun 26.7.5; relative error below
-/// 1 % for ν ≥ 10 at the quantiles used here).
-fn t_quantile(p: f64, nu: f64) -> f64 {
-    let z = normal_quantile(p);
-    let (z3, z5, z7) = (z.powi(3), z.powi(5), z.powi(7));
-    z + (z3 + z) / (4.0 * nu)
-        + (5.0 * z5 + 16.0 * z3 + 3.0 * z) / (96.0 * nu * nu)
-        + (3.0 * z7 + 19.0 * z5 + 17.0 * z3 - 15.0 * z) / (384.0 * nu.powi(3))
-}
-
-/// Block means (per 8×8 block and channel) of an image.
-fn block_means(img: &RenderedFrame) -> Vec<f64> {
-    let mut out = Vec::new();
-    for by in 0..H / BLOCK {
-        for bx in 0..W / BLOCK {
-            for c in 0..3 {
-                let mut s = 0.0f64;
-                for y in by * BLOCK..(by + 1) * BLOCK {
-                    for x in bx * BLOCK..(bx + 1) * BLOCK {
-                        s += img.pixels[(y * W + x) as usize][c] as f64;
-                    }
-                }
-                out.push(s / (BLOCK * BLOCK) as f64);
-            }
-        }
-    }
-    out
-}
-
-/// Variance of each block mean of the reference, from its film's per-pixel variances.
-fn block_variances(img: &RenderedFrame) -> Vec<f64> {
-    let mut out = Vec::new();
-    let n = (BLOCK * BLOCK) as f64;
-    for by in 0..H / BLOCK {
-        for bx in 0..W / BLOCK {
-            for c in 0..3 {
-                let mut v = 0.0f64;
-                for y in by * BLOCK..(by + 1) * BLOCK {
-                    for x in bx * BLOCK..(bx + 1) * BLOCK {
-                        v += img.variance[(y * W + x) as usize][c] as f64;
-                    }
-                }
-                out.push(v / (n * n));
-            }
-        }
-    }
-    out
-}
-
-/// The t-test of the module documentation: `runs` (independent stbpt renders of one
-/// frame) against `reference`.
+/// The t-test of the module documentation (8×8 blocks, family level 1 %): `runs`
+/// (independent stbpt renders of one frame) against `reference`.
 fn assert_agree(runs: &[RenderedFrame], reference: &RenderedFrame, what: &str) {
-    let r = runs.len() as f64;
-    let means: Vec<Vec<f64>> = runs.iter().map(block_means).collect();
-    let refm = block_means(reference);
-    let refv = block_variances(reference);
-    let tests = refm.len();
-    let alpha = 1.0 - (1.0f64 - 0.01).powf(1.0 / tests as f64);
-    let t_crit = t_quantile(1.0 - alpha / 2.0, r - 1.0);
-    let mut worst = 0.0f64;
-    for i in 0..tests {
-        let m = means.iter().map(|b| b[i]).sum::<f64>() / r;
-        let s2 = means.iter().map(|b| (b[i] - m).powi(2)).sum::<f64>() / (r - 1.0);
-        let se = (s2 / r + refv[i]).sqrt();
-        if se == 0.0 {
-            assert_eq!(m, refm[i], "{what}: block {i}: noiseless but different");
-            continue;
-        }
-        let t = (m - refm[i]).abs() / se;
-        worst = worst.max(t);
-        assert!(
-            t < t_crit,
-            "{what}: block {} channel {}: stbpt {m:.5} vs reference {:.5}, t = {t:.2} ≥ {t_crit:.2}",
-            i / 3,
-            i % 3,
-            refm[i]
-        );
-    }
-    eprintln!("{what}: worst block t = {worst:.2} (critical {t_crit:.2}, {tests} tests)");
+    let runs: Vec<&[glam::Vec3]> = runs.iter().map(|r| r.pixels.as_slice()).collect();
+    let reference = Estimate::new(W, H, &reference.pixels, &reference.variance);
+    block_t_test(&runs, &reference, BLOCK, 0.01).assert_passes(what);
 }
 
 /// A static animation (the Cornell box has no animation: every frame is the same scene):

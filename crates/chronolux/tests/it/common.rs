@@ -5,13 +5,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// A shared scene from `../shared/scenes`.
-pub fn scene(name: &str) -> PathBuf {
-    Path::new(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/scenes"
-    ))
-    .join(name)
+/// A shared scene from `shared/scenes` beside the repository; `None` (the test returns)
+/// when it is missing outside CI, a failure under CI (the policy of
+/// `chronolux_core::testing::external`).
+pub fn scene(name: &str) -> Option<PathBuf> {
+    chronolux_core::testing::shared_file(&format!("scenes/{name}"))
 }
 
 /// A fresh, empty folder unique to this process and call.

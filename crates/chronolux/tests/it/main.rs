@@ -5,7 +5,9 @@
 mod bad_input;
 mod common;
 mod config;
+mod farm;
 mod info;
+mod passes;
 mod render;
 mod shutter;
 mod stbpt;

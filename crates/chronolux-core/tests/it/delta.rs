@@ -1,0 +1,345 @@
+//! `FrameDelta`: what changed between two frames, exactly, on the built-in demo and
+//! caustic scenes and on skinned and morphed meshes built in code (the shared glTF scenes
+//! are checked in chronolux-render's tests, which can load glTF), plus segments and
+//! light/material/camera changes made by modifying the scene description.
+
+use chronolux_core::color::Rgb;
+use chronolux_core::math::{Mat4, Vec3, Vec4};
+use chronolux_core::scene::delta::{FrameDelta, dynamic_instances};
+use chronolux_core::scene::desc::{
+    Animation, AnimationId, Channel, ChannelTarget, Interpolation, LightDesc, LightId, LightKind,
+    Material, MaterialId, Mesh, MeshId, MorphTarget, Node, NodeId, SceneDesc, Skin, SkinId,
+};
+use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};
+use chronolux_core::scene::source::FrameSource;
+use chronolux_core::scene::stage;
+use std::sync::Arc;
+
+const FPS: f32 = 24.0;
+
+fn builder(desc: SceneDesc) -> FrameBuilder {
+    let anim = (!desc.animations.is_empty()).then_some(AnimationId(0));
+    FrameBuilder::new(Arc::new(desc), anim, CameraChoice::First, 16, 16).unwrap()
+}
+
+fn frames(desc: SceneDesc, fs: &[u32]) -> Vec<FrameScene> {
+    let mut b = builder(desc);
+    fs.iter().map(|&f| b.build(f as f32 / FPS)).collect()
+}
+
+/// On the Cornell stage: a quad skinned to two joints (the second one animated: the
+/// quad's top edge moves), a quad with one morph target (its weight animated), and a
+/// static quad; one clip of 2 s.
+fn skinned_and_morphed() -> SceneDesc {
+    let quad = |x: f32| chronolux_core::scene::desc::Primitive {
+        positions: vec![
+            Vec3::new(x - 0.5, 0.0, 0.0),
+            Vec3::new(x + 0.5, 0.0, 0.0),
+            Vec3::new(x + 0.5, 1.0, 0.0),
+            Vec3::new(x - 0.5, 1.0, 0.0),
+        ],
+        indices: vec![[0, 1, 2], [0, 2, 3]],
+        material: Some(MaterialId(0)),
+        ..Default::default()
+    };
+    let mut skinned = quad(-1.5);
+    skinned.joints = Some(vec![[0, 0, 0, 0], [0, 0, 0, 0], [1, 0, 0, 0], [1, 0, 0, 0]]);
+    skinned.joint_weights = Some(vec![Vec4::X; 4]);
+    let mut morphed = quad(0.0);
+    morphed.morph_targets.push(MorphTarget {
+        positions: Some(vec![Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z]),
+        ..Default::default()
+    });
+    let node = |name: &str, mesh: Option<u32>| Node {
+        name: name.into(),
+        mesh: mesh.map(MeshId),
+        ..Default::default()
+    };
+    let mut nodes = vec![
+        node("skinned", Some(0)),
+        node("joint_a", None),
+        node("joint_b", None),
+        node("morphed", Some(1)),
+        node("still", Some(2)),
+    ];
+    nodes[0].skin = Some(SkinId(0));
+    nodes[4].transform.translation = Vec3::new(1.5, 0.0, 0.0);
+    let mesh = |p| Mesh {
+        name: String::new(),
+        primitives: vec![p],
+        weights: vec![],
+    };
+    let mut morph_mesh = mesh(morphed);
+    morph_mesh.weights = vec![0.0];
+    let linear = |node: u32, target, values: Vec<f32>, components| Channel {
+        node: NodeId(node),
+        target,
+        interpolation: Interpolation::Linear,
+        times: vec![0.0, 2.0],
+        values,
+        components,
+    };
+    stage::cornell_stage(SceneDesc {
+        name: "skinned_and_morphed".into(),
+        nodes,
+        roots: (0..5).map(NodeId).collect(),
+        meshes: vec![mesh(skinned), morph_mesh, mesh(quad(0.0))],
+        materials: vec![Material::diffuse("grey", Rgb::splat(0.5))],
+        skins: vec![Skin {
+            name: "skin".into(),
+            joints: vec![NodeId(1), NodeId(2)],
+            inverse_bind_matrices: vec![Mat4::IDENTITY; 2],
+        }],
+        animations: vec![Animation {
+            name: "bend".into(),
+            channels: vec![
+                linear(
+                    2,
+                    ChannelTarget::Translation,
+                    vec![0., 0., 0., 0., 0., 0.5],
+                    3,
+                ),
+                linear(3, ChannelTarget::Weights, vec![0.0, 1.0], 1),
+            ],
+        }],
+        ..Default::default()
+    })
+}
+
+/// Instance carrying the geometry of the node named `name`.
+fn instance_of(scene: &FrameScene, desc: &SceneDesc, name: &str) -> usize {
+    let g = scene
+        .geometry
+        .iter()
+        .position(|g| desc.nodes[g.node.index()].name == name)
+        .unwrap_or_else(|| panic!("no geometry on node {name}"));
+    scene.geometry_instance[g] as usize
+}
+
+fn changed_instances(d: &FrameDelta) -> Vec<usize> {
+    (0..d.instance_count())
+        .filter(|&i| d.instance_changed(i))
+        .collect()
+}
+
+#[test]
+fn identical_frames_report_nothing_changed() {
+    let mut b = builder(stage::demo());
+    let (a, a2) = (b.build(0.5), b.build(0.5));
+    for d in [FrameDelta::between(&a, &a), FrameDelta::between(&a, &a2)] {
+        assert!(d.is_static(), "{d:?}");
+        assert!(!d.camera_changed() && !d.lights_changed() && !d.materials_changed());
+        assert!(changed_instances(&d).is_empty());
+    }
+    // The demo's clip ends at 2 s: later instants are the same frame.
+    let (c, e) = (b.build(2.5), b.build(3.0));
+    assert!(FrameDelta::between(&c, &e).is_static());
+}
+
+#[test]
+fn demo_cube_moves_walls_and_camera_stay() {
+    let desc = stage::demo();
+    let fr = frames(desc.clone(), &[0, 6]);
+    let d = FrameDelta::between(&fr[0], &fr[1]);
+    let cube = instance_of(&fr[0], &desc, "sliding_cube");
+    let walls = instance_of(&fr[0], &desc, "ceiling_light");
+    assert_eq!(
+        instance_of(&fr[1], &desc, "sliding_cube"),
+        cube,
+        "instance ids are stable across frames"
+    );
+    assert!(d.instance_moved(cube));
+    assert!(!d.instance_deformed(cube), "a rigid cube is not deformed");
+    assert!(!d.instance_changed(walls));
+    assert_eq!(changed_instances(&d), vec![cube]);
+    assert!(!d.camera_changed(), "the demo's camera is static");
+    assert!(!d.lights_changed() && !d.materials_changed());
+    assert!(!d.is_static());
+    assert_eq!(d, FrameDelta::between(&fr[1], &fr[0]), "symmetric");
+    // Geometry-level view: every primitive of the cube changed, nothing else did.
+    for (g, gd) in fr[0].geometry.iter().enumerate() {
+        let is_cube = desc.nodes[gd.node.index()].name == "sliding_cube";
+        assert_eq!(d.geometry_changed(&fr[0], g as u32), is_cube);
+    }
+}
+
+#[test]
+fn skinned_and_morphed_meshes_are_deformed_not_moved() {
+    let desc = skinned_and_morphed();
+    let fr = frames(desc.clone(), &[0, 12]);
+    let d = FrameDelta::between(&fr[0], &fr[1]);
+    let (skinned, morphed, still) = (
+        instance_of(&fr[0], &desc, "skinned"),
+        instance_of(&fr[0], &desc, "morphed"),
+        instance_of(&fr[0], &desc, "still"),
+    );
+    assert!(skinned != morphed && morphed != still);
+    for i in [skinned, morphed] {
+        assert!(d.instance_deformed(i), "instance {i}");
+        assert!(
+            !d.instance_moved(i),
+            "deformed data is in world space under an identity instance"
+        );
+    }
+    assert!(!d.instance_changed(still));
+    assert!(!d.instance_changed(instance_of(&fr[0], &desc, "ceiling_light")));
+    assert!(!d.camera_changed() && !d.lights_changed() && !d.materials_changed());
+    // The builder rebuilds deformed geometry for every build: at the same time the data
+    // is new (other buffers, other BLAS) but equal, so nothing is deformed.
+    let mut b = builder(desc.clone());
+    let (x, y) = (b.build(0.5), b.build(0.5));
+    let g = fr[0]
+        .geometry
+        .iter()
+        .position(|g| desc.nodes[g.node.index()].name == "skinned")
+        .unwrap();
+    assert!(!Arc::ptr_eq(
+        &x.geometry[g].positions,
+        &y.geometry[g].positions
+    ));
+    assert!(FrameDelta::between(&x, &y).is_static());
+    // After the clip's end the pose holds: deformed geometry is unchanged.
+    assert!(FrameDelta::between(&b.build(2.0), &b.build(2.5)).is_static());
+}
+
+#[test]
+fn segment_dynamic_set_is_the_union_of_pairwise_changes() {
+    for (what, desc) in [
+        ("demo", stage::demo()),
+        ("caustic", stage::caustic()),
+        ("skinned and morphed", skinned_and_morphed()),
+    ] {
+        let fs: Vec<u32> = (0..8).collect();
+        let fr = frames(desc.clone(), &fs);
+        let refs: Vec<&FrameScene> = fr.iter().collect();
+        let seg = dynamic_instances(&refs);
+        let mut union = vec![false; seg.len()];
+        for a in &fr {
+            for b in &fr {
+                let d = FrameDelta::between(a, b);
+                for (u, c) in union.iter_mut().zip(d.dynamic_instances()) {
+                    *u |= c;
+                }
+            }
+        }
+        assert_eq!(seg, union, "{what}");
+        assert!(
+            seg.iter().any(|&c| c),
+            "{what}: something moves in frames 0..8"
+        );
+        // Static instances of the segment are the same surfaces in every frame.
+        let seg_delta = FrameDelta::over(&refs);
+        for (i, _) in seg.iter().enumerate().filter(|(_, c)| !**c) {
+            let (a, b) = (&fr[0].accel.instances()[i], &fr[7].accel.instances()[i]);
+            assert_eq!(a.world_from_object, b.world_from_object, "{what}");
+            assert!(!seg_delta.instance_changed(i));
+        }
+        // Through the frame source (built two at a time).
+        let mut src = FrameSource::new(builder(desc), FPS, fs.clone());
+        assert_eq!(src.delta_over(&fs), seg_delta, "{what}");
+    }
+    // The caustic occluder enters between frames 3 and 4 (a STEP key): it is dynamic in a
+    // segment across the step and static in segments before and after it.
+    let desc = stage::caustic();
+    let fr = frames(desc.clone(), &[0, 1, 2, 3, 4, 5]);
+    let occluder = fr[0]
+        .geometry
+        .iter()
+        .position(|g| desc.nodes[g.node.index()].name == "occluder")
+        .map(|g| fr[0].geometry_instance[g] as usize)
+        .expect("the caustic scene's occluder");
+    let seg = |r: std::ops::Range<usize>| dynamic_instances(&fr[r].iter().collect::<Vec<_>>());
+    assert!(!seg(0..4)[occluder] && !seg(4..6)[occluder] && seg(3..5)[occluder]);
+}
+
+/// The demo with an animated point light, with a brighter lamp material, and with an
+/// animated camera: each change is reported, and only it.
+#[test]
+fn light_material_and_camera_changes_are_detected() {
+    // An animated point light on the demo's clip.
+    let mut desc = stage::demo();
+    let node = NodeId(desc.nodes.len() as u32);
+    desc.lights.push(LightDesc {
+        name: "bulb".into(),
+        color: Rgb::ONE,
+        intensity: 3.0,
+        kind: LightKind::Point,
+    });
+    desc.nodes.push(Node {
+        name: "bulb".into(),
+        light: Some(LightId(desc.lights.len() as u32 - 1)),
+        ..Default::default()
+    });
+    desc.roots.push(node);
+    desc.animations[0].channels.push(Channel {
+        node,
+        target: ChannelTarget::Translation,
+        interpolation: Interpolation::Linear,
+        times: vec![0.0, 2.0],
+        values: vec![0.0, 0.5, 0.0, 0.0, 0.8, 0.0],
+        components: 3,
+    });
+    let fr = frames(desc, &[0, 6]);
+    let d = FrameDelta::between(&fr[0], &fr[1]);
+    let bulb = fr[0]
+        .lights
+        .iter()
+        .position(|l| matches!(l, chronolux_core::light::Light::Point { .. }))
+        .unwrap();
+    assert!(d.light_changed(bulb) && d.lights_changed());
+    assert_eq!(
+        (0..fr[0].lights.len())
+            .filter(|&l| d.light_changed(l))
+            .collect::<Vec<_>>(),
+        vec![bulb],
+        "the lamp's triangles are unchanged"
+    );
+    assert!(!d.camera_changed());
+
+    // A material changed: same scene, brighter lamp (two builders: no shared data).
+    let base = stage::demo();
+    let mut brighter = base.clone();
+    let lamp = brighter
+        .materials
+        .iter()
+        .position(|m| m.name == "light")
+        .unwrap();
+    brighter.materials[lamp].emissive *= 2.0;
+    let (a, b) = (&frames(base.clone(), &[3])[0], &frames(brighter, &[3])[0]);
+    let d = FrameDelta::between(a, b);
+    assert_eq!(
+        (0..a.materials.len())
+            .filter(|&m| d.material_changed(m))
+            .collect::<Vec<_>>(),
+        vec![lamp]
+    );
+    // Every lamp triangle's radiance changed; nothing moved.
+    assert!(!a.lights.is_empty());
+    assert!((0..a.lights.len()).all(|l| d.light_changed(l)));
+    assert!(changed_instances(&d).is_empty() && !d.camera_changed());
+    // Same description built twice: equal by value.
+    let c = &frames(base.clone(), &[3])[0];
+    assert!(FrameDelta::between(a, c).is_static());
+
+    // A moving camera.
+    let mut moving = base;
+    let cam = moving
+        .nodes
+        .iter()
+        .position(|n| n.camera.is_some())
+        .unwrap();
+    let z = moving.nodes[cam].transform.translation;
+    moving.animations[0].channels.push(Channel {
+        node: NodeId(cam as u32),
+        target: ChannelTarget::Translation,
+        interpolation: Interpolation::Linear,
+        times: vec![0.0, 2.0],
+        values: vec![z.x, z.y, z.z, z.x + 0.3, z.y, z.z],
+        components: 3,
+    });
+    let fr = frames(moving, &[0, 6, 60]);
+    assert!(FrameDelta::between(&fr[0], &fr[1]).camera_changed());
+    let end = frames(stage::demo(), &[60]);
+    assert!(!FrameDelta::between(&fr[0], &fr[0]).camera_changed());
+    assert!(FrameDelta::between(&fr[2], &end[0]).camera_changed());
+}

@@ -1,0 +1,704 @@
+//! Generation: one frame's samples, made once in f and served to every frame of its
+//! window (see "Per sample (generated once, in frame f)" in the module doc). The subpaths
+//! are traced through the window structure, so each segment's validity in the other
+//! frames comes with its hit, and the view-independent part at x1 is split off here;
+//! per window frame, [`super::landing`] decides how the sample serves it,
+//! [`super::reuse`] computes the value and [`super::motion`] the motion-blur trajectory.
+
+use super::landing::{Landing, Walk, barycentrics};
+use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH};
+use crate::bdpt::{
+    BdptSettings, Vertex, VertexKind, connect_with, generate_camera_subpath,
+    generate_camera_subpath_with, generate_light_subpath, generate_light_subpath_with, mis_weight,
+};
+use crate::integrator::{TILE, tile_rect};
+use crate::temporal::window_film::Contribution;
+use chronolux_core::accel::Hit;
+use chronolux_core::accel::multi_frame::{FrameMask, MultiFrameAccel, WindowHit};
+use chronolux_core::bsdf::TransportMode;
+use chronolux_core::color::Rgb;
+use chronolux_core::geometry::Ray;
+use chronolux_core::math::{Vec2, Vec3};
+use chronolux_core::parallel;
+use chronolux_core::sampling::sampler::PixelSampler;
+use chronolux_core::scene::delta::FrameDelta;
+use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::scene::source::FrameSource;
+use chronolux_core::stats::Stats;
+use std::sync::Arc;
+
+/// Counts of one generated frame's samples, per window frame.
+#[derive(Clone, Debug, Default)]
+pub(super) struct Counts {
+    /// Samples that landed in each window frame (own frame included).
+    pub(super) landed: Vec<u64>,
+    /// Of those, served by reuse of the view-independent part / by re-tracing.
+    pub(super) reused: Vec<u64>,
+    /// Of the reused: only the strategies s ≤ 1 (the light subpath changed in g; the
+    /// strategies s ≥ 2 were recomputed with g's light subpath).
+    pub(super) partial: Vec<u64>,
+    pub(super) retraced: Vec<u64>,
+    pub(super) invalid: Vec<u64>,
+}
+
+impl Counts {
+    fn new(n: usize) -> Self {
+        Counts {
+            landed: vec![0; n],
+            reused: vec![0; n],
+            partial: vec![0; n],
+            retraced: vec![0; n],
+            invalid: vec![0; n],
+        }
+    }
+
+    fn add(&mut self, o: &Counts) {
+        for (a, b) in [
+            (&mut self.landed, &o.landed),
+            (&mut self.reused, &o.reused),
+            (&mut self.partial, &o.partial),
+            (&mut self.retraced, &o.retraced),
+            (&mut self.invalid, &o.invalid),
+        ] {
+            for (x, y) in a.iter_mut().zip(b) {
+                *x += y;
+            }
+        }
+    }
+}
+
+/// Two answers of one ray that give the same vertex.
+fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => {
+            a.tri == b.tri
+                && a.instance == b.instance
+                && a.t.to_bits() == b.t.to_bits()
+                && a.b1.to_bits() == b.b1.to_bits()
+                && a.b2.to_bits() == b.b2.to_bits()
+        }
+        _ => false,
+    }
+}
+
+/// Answers the rays of a subpath walked in window frame `jf` with one multi-frame query
+/// each: returns frame `jf`'s hit (exactly what `scene.intersect` gives: the structure's
+/// answers equal per-frame queries) and pushes to `masks` the window frames in which the
+/// ray gives that same hit, i.e. in which the segment is reproduced. This replaces tracing
+/// the walk in f and then checking every segment again against the window (one traversal
+/// per segment instead of two).
+fn window_trace<'a>(
+    mfa: &'a MultiFrameAccel,
+    scene: &'a FrameScene,
+    jf: usize,
+    wh: &'a mut WindowHit,
+    masks: &'a mut Vec<FrameMask>,
+    rays: Option<&'a mut Vec<Ray>>,
+) -> impl FnMut(&Ray) -> Option<Hit> + 'a {
+    masks.clear();
+    let mut rays = rays;
+    if let Some(r) = rays.as_deref_mut() {
+        r.clear();
+    }
+    let all = mfa.all_frames();
+    move |ray| {
+        if let Some(r) = rays.as_deref_mut() {
+            r.push(*ray);
+        }
+        mfa.intersect_window_into(ray, all, |t, b1, b2| scene.accept(t, b1, b2), wh);
+        let hf = wh.frame(jf);
+        let mut mask = all;
+        if wh.differs != 0 {
+            for j in 0..mfa.frame_count() {
+                if !same_hit(wh.frame(j), hf) {
+                    mask &= !(1u64 << j);
+                }
+            }
+        }
+        masks.push(mask);
+        hf
+    }
+}
+
+/// One view-independent entry at x1.
+pub(super) struct Entry {
+    /// Light vertices of the strategy: s ≤ 1 does not depend on the light subpath.
+    pub(super) s: usize,
+    pub(super) wi: Vec3,
+    pub(super) r: Rgb,
+    /// The contribution as computed in f (for f itself, no rounding from the split).
+    pub(super) c: Rgb,
+    /// Window frames in which the entry's shadow ray is unoccluded.
+    pub(super) vis: FrameMask,
+}
+
+/// Per-thread scratch buffers.
+#[derive(Default)]
+pub(super) struct Scratch {
+    cam: Vec<Vertex>,
+    cam_rays: Vec<Ray>,
+    /// Per traced ray of the camera / light subpath: the window frames reproducing it.
+    cam_masks: Vec<FrameMask>,
+    light_masks: Vec<FrameMask>,
+    wh: WindowHit,
+    light: Vec<Vertex>,
+    light_g: Vec<Vertex>,
+    cam_g: Vec<Vertex>,
+    entries: Vec<Entry>,
+    /// Frame f's light-tracing splats: (pixel, value, frames where unoccluded).
+    splats: Vec<(u32, Rgb, FrameMask)>,
+}
+
+/// Read-only state of one generated frame.
+pub(super) struct Generation<'a> {
+    pub(super) bdpt: &'a BdptSettings,
+    pub(super) frames: &'a [u32],
+    pub(super) scenes: &'a [Arc<FrameScene>],
+    pub(super) jf: usize,
+    pub(super) f: u32,
+    pub(super) mfa: &'a MultiFrameAccel,
+    /// Frames whose lights (and materials) equal f's.
+    pub(super) lights_same: FrameMask,
+    pub(super) materials_same: FrameMask,
+    /// Frames whose camera is f's (same placement, projection and image size).
+    pub(super) same_camera: FrameMask,
+    /// Shutter as a fraction of the frame interval (0: no motion blur).
+    pub(super) shutter: f32,
+    /// What differs between f and each window frame (`from_f[jf]`: nothing).
+    pub(super) from_f: &'a [FrameDelta],
+    /// What differs between window frames `j` and `j + 1` (motion blur only; else empty).
+    pub(super) steps: &'a [FrameDelta],
+}
+
+/// A sample landed in window frame `j` at `raster` with `value` (buffered until the
+/// sample is complete, so a motion-blurred landing can use the sample's values in the
+/// neighbouring frames).
+#[derive(Clone, Copy)]
+pub(super) struct Landed {
+    pub(super) j: usize,
+    pub(super) raster: Vec2,
+    pub(super) value: Rgb,
+    /// Motion blur: raster positions of the sample's point one frame before / after.
+    pub(super) around: [Option<Vec2>; 2],
+    /// The landing shows the point the sample found in its own frame (own frame or
+    /// reuse), so its values in two frames are the radiance of one point at two times;
+    /// a re-traced landing may show another point.
+    pub(super) same_point: bool,
+}
+
+/// Output of one tile of one pass.
+pub(super) struct TileOut {
+    pub(super) batch: Vec<Contribution>,
+    pub(super) squares: Vec<Contribution>,
+    pub(super) splats: Vec<Contribution>,
+    /// Motion blur: per landed sample, its raster offsets to where its point is seen one
+    /// frame before / after, and its values there (films `film_blur[0..4]`).
+    pub(super) blur: [Vec<Contribution>; 4],
+    pub(super) landings: Vec<Landed>,
+    pub(super) stats: Vec<Stats>,
+    pub(super) counts: Counts,
+}
+
+impl Generation<'_> {
+    /// The t = 1 strategies of `light` in frame `j`, splatted into `out`. With `record`
+    /// (frame f only), shadow rays are answered for the whole window and every splat is
+    /// recorded with the frames it is unoccluded in, for the frames that share f's camera.
+    #[allow(clippy::too_many_arguments)] // reason: the subpaths, the frame and the outputs
+    fn light_trace(
+        &self,
+        j: usize,
+        light: &[Vertex],
+        camera: &[Vertex],
+        conn: &PixelSampler,
+        out: &mut TileOut,
+        invalid: &mut u64,
+        mut record: Option<&mut Vec<(u32, Rgb, FrameMask)>>,
+    ) {
+        let scene = &self.scenes[j];
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let max_segments = self.bdpt.depth() as usize;
+        let mut sampler = conn.clone();
+        let all = self.mfa.all_frames();
+        for s in 2..=light.len() {
+            if s > max_segments {
+                break;
+            }
+            let mut vis: FrameMask = 1 << j;
+            // Recording: the shadow ray answered for the whole window; otherwise for j.
+            let windowed = record.is_some();
+            let c = connect_with(
+                scene,
+                self.bdpt,
+                light,
+                camera,
+                s,
+                1,
+                &mut sampler,
+                &mut out.stats[j],
+                &mut |r| {
+                    if windowed {
+                        vis = all
+                            & !self
+                                .mfa
+                                .occluded_window(r, all, |a, b1, b2| scene.accept(a, b1, b2));
+                        vis != 0
+                    } else {
+                        !scene.occluded(r)
+                    }
+                },
+            )
+            .map(|c| c.contribution);
+            let Some(c) = c else { continue };
+            let Some(r) = c.raster else { continue };
+            if !c.l.is_finite() {
+                *invalid += 1;
+                continue;
+            }
+            let (x, y) = (r.x as u32, r.y as u32);
+            if r.x >= 0.0 && r.y >= 0.0 && x < w && y < h {
+                if let Some(rec) = record.as_deref_mut() {
+                    rec.push((y * w + x, c.l, vis));
+                }
+                if vis >> j & 1 == 1 {
+                    out.splats.push(Contribution {
+                        frame: self.frames[j],
+                        pixel: y * w + x,
+                        value: c.l,
+                        weight: 0.0,
+                        splat: true,
+                    });
+                }
+            }
+        }
+    }
+
+    fn land(
+        out: &mut TileOut,
+        j: usize,
+        raster: Vec2,
+        value: Rgb,
+        around: [Option<Vec2>; 2],
+        same_point: bool,
+    ) {
+        out.landings.push(Landed {
+            j,
+            raster,
+            value,
+            around,
+            same_point,
+        });
+    }
+
+    /// The shading split of a sample at its first eye vertex x1 (module doc, "Per sample"):
+    /// every strategy t ≥ 2 of `cam` and `light` evaluated in f, its shadow ray answered
+    /// for the whole window, written into `entries` as `f(x1, wo, wi_k) ⊙ R_k` (R_k: all
+    /// but x1's BSDF for f's view). Returns x1's own emission (s = 0, t = 2) with its MIS
+    /// weight, kept apart because it is re-evaluated towards another view.
+    fn split_at_x1(
+        &self,
+        light: &[Vertex],
+        cam: &[Vertex],
+        cam_rays: &[Ray],
+        ns: &PixelSampler,
+        entries: &mut Vec<Entry>,
+        st: &mut Stats,
+    ) -> Option<(Rgb, f32)> {
+        let scene_f = &self.scenes[self.jf];
+        let all = self.mfa.all_frames();
+        let max_segments = self.bdpt.depth() as usize;
+        entries.clear();
+        let mut emission: Option<(Rgb, f32)> = None;
+        let mut sampler = ns.clone();
+        for t in 2..=cam.len() {
+            for s in 0..=light.len() {
+                if s + t - 1 > max_segments {
+                    continue;
+                }
+                let mut vis = all;
+                let c = connect_with(
+                    scene_f,
+                    self.bdpt,
+                    light,
+                    cam,
+                    s,
+                    t,
+                    &mut sampler,
+                    st,
+                    &mut |r| {
+                        vis = all
+                            & !self
+                                .mfa
+                                .occluded_window(r, all, |a, b1, b2| scene_f.accept(a, b1, b2));
+                        vis != 0
+                    },
+                );
+                let Some(c) = c else { continue };
+                let l = c.contribution.l;
+                let x1v = &cam[1];
+                if s == 0 && t == 2 {
+                    let w = mis_weight(scene_f, self.bdpt, light, cam, None, 0, 2);
+                    emission = Some((l, w));
+                    continue;
+                }
+                let sv = x1v
+                    .surface
+                    .as_ref()
+                    .expect("strategies other than (0, 2) need x1 on a surface");
+                let wi = if t == 2 {
+                    (c.light_point.expect("s ≥ 1") - x1v.p).normalize_or_zero()
+                } else {
+                    cam_rays[1].d.normalize()
+                };
+                let fv = sv.bsdf.f(sv.wo, wi, TransportMode::Radiance);
+                let r = Rgb::new(
+                    if fv.x != 0.0 { l.x / fv.x } else { 0.0 },
+                    if fv.y != 0.0 { l.y / fv.y } else { 0.0 },
+                    if fv.z != 0.0 { l.z / fv.z } else { 0.0 },
+                );
+                entries.push(Entry {
+                    s,
+                    wi,
+                    r,
+                    c: l,
+                    vis,
+                });
+            }
+        }
+        emission
+    }
+
+    /// One sample: generated in f, landed/reused/re-traced in every window frame.
+    pub(super) fn sample(&self, px: u32, py: u32, index: u32, sc: &mut Scratch, out: &mut TileOut) {
+        let (seed, f, jf) = (self.bdpt.seed, self.f, self.jf);
+        let n = self.scenes.len();
+        let scene_f = &self.scenes[jf];
+        let all = self.mfa.all_frames();
+        let mut cs = PixelSampler::new(seed, f, px, py);
+        cs.start_sample(index);
+        let mut ls = PixelSampler::new(seed ^ LIGHT_STREAM, f, px, py);
+        ls.start_sample(index);
+        let mut ns = PixelSampler::new(seed ^ CONNECTION_STREAM, f, px, py);
+        ns.start_sample(index);
+        let raster = Vec2::new(px as f32, py as f32) + cs.next_2d();
+        let cs0 = cs.clone();
+        let ls0 = ls.clone();
+        let st = &mut out.stats[jf];
+        generate_camera_subpath_with(
+            scene_f,
+            self.bdpt,
+            raster,
+            &mut cs,
+            &mut sc.cam,
+            st,
+            &mut window_trace(
+                self.mfa,
+                scene_f,
+                jf,
+                &mut sc.wh,
+                &mut sc.cam_masks,
+                Some(&mut sc.cam_rays),
+            ),
+        );
+        generate_light_subpath_with(
+            scene_f,
+            self.bdpt,
+            &mut ls,
+            &mut sc.light,
+            st,
+            &mut window_trace(self.mfa, scene_f, jf, &mut sc.wh, &mut sc.light_masks, None),
+        );
+        st.samples += 1;
+        let (cam, light) = (&sc.cam, &sc.light);
+
+        // Validity of the sampled segments in the other frames.
+        let and = |m: &[FrameMask]| m.iter().fold(all, |a, b| a & b);
+        let light_valid = and(&sc.light_masks) & self.lights_same;
+        let x1 = cam.get(1).filter(|v| v.kind == VertexKind::Surface);
+        // Camera segments after x1 reproduced (the camera subpath is the same walk in g).
+        let cam_segments = if x1.is_some() {
+            and(sc.cam_masks.get(1..).unwrap_or(&[])) & self.materials_same
+        } else {
+            1 << jf
+        };
+        let cam_valid = if n > 1 && x1.is_some() {
+            cam_segments & light_valid
+        } else if n > 1 && !sc.cam_masks.is_empty() {
+            // An escaped camera ray: its value (the environment, or nothing) is reused
+            // where the same ray escapes too.
+            sc.cam_masks[0] & self.lights_same & self.materials_same
+        } else {
+            1 << jf
+        };
+
+        // View-independent part at x1 (t ≥ 2), shadow rays answered for the whole window.
+        let emission = self.split_at_x1(light, cam, &sc.cam_rays, &ns, &mut sc.entries, st);
+
+        // Own frame: the ordinary BDPT sample.
+        let mut own = emission.map_or(Rgb::ZERO, |(l, _)| l);
+        for e in &sc.entries {
+            if e.vis >> jf & 1 == 1 {
+                own += e.c;
+            }
+        }
+        let mut inv = 0u64;
+        let around_f = self.trajectory(jf, jf, cam.get(1), sc.cam_rays.first().map(|r| r.d));
+        if own.is_finite() {
+            Self::land(out, jf, raster, own, around_f, true);
+        } else {
+            inv += 1;
+            Self::land(out, jf, raster, Rgb::ZERO, around_f, true);
+        }
+        out.counts.landed[jf] += 1;
+        sc.splats.clear();
+        let record = (n > 1).then_some(&mut sc.splats);
+        self.light_trace(jf, light, cam, &ns, out, &mut inv, record);
+        out.counts.invalid[jf] += inv;
+
+        // Other frames of the window.
+        let walk = Walk {
+            x1,
+            x1_bary: x1.and_then(|v| barycentrics(scene_f, v)),
+            escape: sc.cam_rays.first().copied(),
+            cam_valid,
+            cam_segments,
+        };
+        // Landing visibility of x1 from f's eye, answered once for the whole window (the
+        // same ray in every frame where x1 and the eye do not move).
+        let mut land_occ: Option<FrameMask> = None;
+        for j in (0..n).filter(|&j| j != jf) {
+            let scene_g = &self.scenes[j];
+            let frame_g = self.frames[j];
+            let mut inv = 0u64;
+            // Light part: reused or re-generated from the same light stream.
+            let light_ok = light_valid >> j & 1 == 1;
+            if !light_ok {
+                let mut l2 = ls0.clone();
+                generate_light_subpath(
+                    scene_g,
+                    self.bdpt,
+                    &mut l2,
+                    &mut sc.light_g,
+                    &mut out.stats[j],
+                );
+            }
+            if light_ok && self.same_camera >> j & 1 == 1 {
+                // Same light subpath, same camera: the same splats, where unoccluded in g.
+                for &(pixel, value, vis) in &sc.splats {
+                    if vis >> j & 1 == 1 {
+                        out.splats.push(Contribution {
+                            frame: frame_g,
+                            pixel,
+                            value,
+                            weight: 0.0,
+                            splat: true,
+                        });
+                    }
+                }
+            } else {
+                let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
+                self.light_trace(j, light_g, cam, &ns, out, &mut inv, None);
+            }
+
+            // Camera part: where does the sample land in g, and how does it serve g?
+            let landing = self.landing(j, &walk, &mut land_occ, &mut out.stats);
+            let esc_dir = sc.cam_rays.first().map(|r| r.d);
+            let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
+            let mut around = [None, None];
+            let (raster_g, value, same_point) = match landing {
+                Landing::Missed => {
+                    out.counts.invalid[j] += inv;
+                    continue;
+                }
+                Landing::ReuseEscaped(r) => {
+                    out.counts.reused[j] += 1;
+                    around = self.trajectory(j, jf, None, esc_dir);
+                    (r, own, true)
+                }
+                Landing::Reuse(r) | Landing::Partial(r) => {
+                    let partial = matches!(landing, Landing::Partial(_));
+                    around = self.trajectory(j, jf, x1, esc_dir);
+                    let v = x1.expect("reuse needs x1 on a surface");
+                    let regenerated =
+                        partial.then_some((&sc.light_g[..], &cam[..], &sc.cam_rays[..]));
+                    let l = self.reused_value(
+                        j,
+                        v,
+                        emission,
+                        &sc.entries,
+                        regenerated,
+                        &ns,
+                        &mut out.stats[j],
+                    );
+                    if partial {
+                        out.counts.partial[j] += 1;
+                    }
+                    out.counts.reused[j] += 1;
+                    (r, l, true)
+                }
+                Landing::RetraceConnections(r) => {
+                    out.counts.retraced[j] += 1;
+                    let l = self.camera_strategies(j, light_g, cam, &ns, &mut out.stats[j]);
+                    (r, l, false)
+                }
+                Landing::Retrace(r) => {
+                    let mut c2 = cs0.clone();
+                    generate_camera_subpath(
+                        scene_g,
+                        self.bdpt,
+                        r,
+                        &mut c2,
+                        &mut sc.cam_g,
+                        &mut out.stats[j],
+                    );
+                    out.counts.retraced[j] += 1;
+                    if self.shutter > 0.0 {
+                        let d = scene_g.camera.generate_ray(r).d;
+                        around = self.trajectory(j, j, sc.cam_g.get(1), Some(d));
+                    }
+                    let l = self.camera_strategies(j, light_g, &sc.cam_g, &ns, &mut out.stats[j]);
+                    (r, l, false)
+                }
+            };
+            out.counts.landed[j] += 1;
+            if value.is_finite() {
+                Self::land(out, j, raster_g, value, around, same_point);
+            } else {
+                inv += 1;
+                Self::land(out, j, raster_g, Rgb::ZERO, around, same_point);
+            }
+            out.counts.invalid[j] += inv;
+        }
+        self.flush(out);
+    }
+}
+
+impl Stbpt {
+    /// Generates the samples of frame `f` and adds them to every frame of its window.
+    pub(super) fn generate(
+        &mut self,
+        source: &mut FrameSource,
+        f: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) {
+        let k = self.k();
+        let frames = source.window(f, k, k);
+        let scenes: Vec<Arc<FrameScene>> = frames.iter().map(|&g| source.frame(g)).collect();
+        let jf = frames
+            .iter()
+            .position(|&g| g == f)
+            .expect("f is in its window");
+        let accels: Vec<_> = scenes.iter().map(|s| &s.accel).collect();
+        let mfa = MultiFrameAccel::new(frames[0], &accels);
+        // What differs between f and each window frame (and, for motion blur, between
+        // neighbouring frames): every decision of the samples about the scene is read
+        // from these.
+        let from_f: Vec<FrameDelta> = scenes
+            .iter()
+            .map(|s| FrameDelta::between(&scenes[jf], s))
+            .collect();
+        let steps: Vec<FrameDelta> = if self.settings.shutter > 0.0 {
+            scenes
+                .windows(2)
+                .map(|w| FrameDelta::between(&w[0], &w[1]))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let mut lights_same: FrameMask = 0;
+        let mut materials_same: FrameMask = 0;
+        let mut same_camera: FrameMask = 0;
+        for (j, d) in from_f.iter().enumerate() {
+            // Light subpaths and light samples depend on the lights and, through lights
+            // at infinity, on the scene's bounding sphere; a change of the bounds counts
+            // in any case (conservative where no light is at infinity).
+            if !(d.lights_changed() || d.bounds_changed()) {
+                lights_same |= 1 << j;
+            }
+            if !d.materials_changed() {
+                materials_same |= 1 << j;
+            }
+            if !d.camera_changed() {
+                same_camera |= 1 << j;
+            }
+        }
+        self.open_films(scenes[jf].camera.width, scenes[jf].camera.height);
+        let gen_ = Generation {
+            same_camera,
+            bdpt: &self.settings.bdpt,
+            frames: &frames,
+            scenes: &scenes,
+            jf,
+            f,
+            mfa: &mfa,
+            lights_same,
+            materials_same,
+            shutter: self.settings.shutter,
+            from_f: &from_f,
+            steps: &steps,
+        };
+        let cam = &scenes[jf].camera;
+        let (w, h) = (cam.width, cam.height);
+        let film = self.film.as_mut().expect("opened");
+        let film_sq = self.film_sq.as_mut().expect("opened");
+        let film_splat = self.film_splat.as_mut().expect("opened");
+        let film_blur = &mut self.film_blur;
+        let tiles_x = w.div_ceil(TILE);
+        let n_tiles = (tiles_x * h.div_ceil(TILE)) as usize;
+        let n = frames.len();
+        let spp = self.settings.bdpt.spp;
+        let mut counts = Counts::new(n);
+        let mut stats = vec![Stats::default(); n];
+        for (s, first) in
+            (0..spp).flat_map(|s| (0..n_tiles).step_by(TILES_PER_BATCH).map(move |t| (s, t)))
+        {
+            let batch_tiles = TILES_PER_BATCH.min(n_tiles - first);
+            let results = parallel::map_chunks(batch_tiles, 1, |range| {
+                let t = (first + range.start) as u32;
+                let (x0, y0, tw, th) = tile_rect(t, tiles_x, TILE, w, h);
+                let mut out = TileOut {
+                    batch: Vec::new(),
+                    squares: Vec::new(),
+                    splats: Vec::new(),
+                    blur: Default::default(),
+                    landings: Vec::new(),
+                    stats: vec![Stats::default(); n],
+                    counts: Counts::new(n),
+                };
+                let mut sc = Scratch::default();
+                for y in y0..y0 + th {
+                    for x in x0..x0 + tw {
+                        gen_.sample(x, y, s, &mut sc, &mut out);
+                    }
+                }
+                let np = (tw * th) as u64;
+                progress(np * (s as u64 + 1) / spp as u64 - np * s as u64 / spp as u64);
+                out
+            });
+            for r in &results {
+                film.add_batch(&r.batch);
+                film_sq.add_batch(&r.squares);
+                film_splat.add_batch(&r.splats);
+                for (film, batch) in film_blur.iter_mut().zip(&r.blur) {
+                    film.add_batch(batch);
+                }
+                counts.add(&r.counts);
+                for (a, b) in stats.iter_mut().zip(&r.stats) {
+                    *a += *b;
+                }
+            }
+        }
+        for (j, &g) in frames.iter().enumerate() {
+            let p = self.pending.entry(g).or_default();
+            p.stats += stats[j];
+            p.landed += counts.landed[j];
+            p.reused += counts.reused[j];
+            p.partial += counts.partial[j];
+            p.retraced += counts.retraced[j];
+            p.invalid += counts.invalid[j];
+        }
+        let generated = (w as u64 * h as u64 * spp as u64).max(1) as f64;
+        self.served
+            .insert(f, counts.landed.iter().sum::<u64>() as f64 / generated);
+    }
+}

@@ -1,0 +1,412 @@
+//! Spatio-temporal bidirectional path tracing (Havran, Damez, Myszkowski, Seidel, "An
+//! efficient spatio-temporal architecture for animation rendering", EGSR 2003): every
+//! bidirectional sample made for a pixel of frame f also serves the frames g of the
+//! centred window [f − K, f + K], at the pixel through which its first eye vertex is seen
+//! in g.
+//!
+//! # Per sample (generated once, in frame f)
+//!
+//! A BDPT sample as [`crate::bdpt`] makes it (camera subpath, light subpath, every
+//! strategy (s, t) with MIS), from three streams of its own keyed by (seed, f, pixel,
+//! sample index): camera, light and connection numbers. Separate streams let a sample be
+//! re-traced in another frame with a camera subpath of a different length without the
+//! light subpath or the light samples reusing numbers the camera subpath consumed.
+//!
+//! Recorded: the first eye vertex x1 (a surface point: geometry id, triangle and
+//! barycentrics through the instance that carries it — never a pixel), every ray the two
+//! subpaths traced, and the **shading split** (item 4): the t ≥ 2 contributions are
+//! written `f(x1, wo, wi_k) ⊙ R_k` with `R_k` holding everything but x1's BSDF value for
+//! the view direction `wo` — the NEE and light-vertex connections at x1 (t = 2, `wi_k`
+//! towards the light point), and each strategy with t ≥ 3 (they all share x1's sampled
+//! continuation `wi`: `R = c ⊘ f(wo_f, wi)`, i.e. the incident radiance estimate times
+//! |cos|/pdf and its MIS weight). x1's own emission (s = 0, t = 2) is kept as its MIS
+//! weight, the emitted radiance being re-evaluated towards the new view. Directions are
+//! kept in world space: reuse happens only while x1's object does not move, when x1's
+//! shading frame is the same in f and g, so world and local directions are equivalent.
+//!
+//! # Reuse in frame g
+//!
+//! 1. **Landing.** x1 in g (same triangle and barycentrics on g's geometry: motion
+//!    compensated) is projected into g's camera; it lands in g iff it is on screen, faces
+//!    g's camera from the same side as f's, and nothing in g occludes it. Samples whose
+//!    camera ray escaped land where their direction projects in g. A sample that does not
+//!    land does not serve g's camera part (it still serves g's light tracing, below).
+//! 2. **Reuse** (the view-dependent part only) when everything the split depends on is
+//!    reproduced in g: x1's instance has the same placement and data in f and g (as
+//!    every scene comparison here: from the exact [`FrameDelta`]s of f and the window
+//!    frames), the sample continued from x1 by a non-delta lobe, x1 is not near-specular
+//!    ([`Bsdf::near_specular`]: GGX α < 0.1) while the camera moved (the continuation,
+//!    sampled for f's view, would not cover g's lobe), materials and lights are the same,
+//!    and every segment the subpaths sampled beyond x1 — camera segments after x1, all
+//!    light segments, escape rays included — gives the same hit in g as in f according to [`MultiFrameAccel::intersect_window`] (the
+//!    module's "Use for sample reuse"). Shadow rays of the connections are not a validity
+//!    condition: [`MultiFrameAccel::occluded_window`] answers them for every frame at
+//!    generation, and an occluded connection contributes 0 in that frame. The value in g
+//!    is `Le(x1 → wo_g)·w_e + Σ_k V_k(g) f(x1, wo_g, wi_k) ⊙ R_k`: only x1's BSDF and
+//!    emission are re-evaluated.
+//!    **Partial reuse** when only the light subpath is invalid in g (x1 and every camera
+//!    segment reproduced, same lights and materials): the strategies without light-subpath
+//!    vertices (s ≤ 1: emission, NEE, camera paths hitting a light) are reused as above,
+//!    and the strategies s ≥ 2 are recomputed in g's scene by connecting f's camera
+//!    subpath (which is g's walk too) to the light subpath regenerated in g, split at x1
+//!    the same way. Each strategy's weighted contribution is an unbiased estimate of its
+//!    share on its own, so mixing f's s ≤ 1 terms with g's s ≥ 2 terms is unbiased.
+//! 3. **Re-trace** otherwise: a fresh BDPT evaluation in g's scene, of the same streams,
+//!    for a camera ray through the raster position where x1 landed. A sample invalid for
+//!    g never contributes a stale value; re-tracing (instead of dropping) keeps the
+//!    samples landing in a pixel independent of where geometry changed, so changed regions
+//!    are not under-sampled relative to static ones.
+//! 4. **Light tracing** (t = 1): every light subpath of the window serves g: reused when
+//!    its segments are reproduced in g and the lights are the same, otherwise re-generated
+//!    in g from the same light stream; its vertices are connected to g's camera and
+//!    splatted. When g's camera is f's and the light subpath is reused, the connections
+//!    are the same too: f's splats are reused, each where its shadow ray (answered for
+//!    the window at generation) is unoccluded in g. Frame g's splats are scaled by
+//!    1 / (spp × frames of g's window).
+//!
+//! # Cost
+//!
+//! Both subpaths are traced through the window structure itself
+//! ([`MultiFrameAccel::intersect_window`], whose answer for f equals f's own query), so each
+//! segment's validity over the window costs no second traversal. x1's landing visibility
+//! is one [`MultiFrameAccel::occluded_window`] query for every frame in which x1 and the
+//! eye are where they were in f (static object, static camera position), one ray per
+//! frame otherwise.
+//!
+//! Pixel value of g: Σ values / Σ landed samples per pixel ([`WindowFilm`]), plus the
+//! scaled splats.
+//!
+//! # Bias
+//!
+//! Each landed sample is an unbiased estimate of the radiance through the raster position
+//! it landed at (re-traced ones trivially; reused ones because f's continuation density
+//! is the density the sample was drawn with — `f(wo_g, wi)/pdf_f(wi)` is an ordinary
+//! importance-sampling weight wherever `pdf_f > 0`, which holds for the non-delta,
+//! non-near-specular lobes reuse is restricted to). The pixel value is the mean over the
+//! samples that landed, so it estimates the radiance averaged over the pixel with the
+//! *landing density* instead of the uniform box filter. That density is uniform (the
+//! frame-f density moved by a smooth map) except where landing is interrupted: points
+//! hidden in g, disocclusions (nothing lands where f could not see) and image borders.
+//! The estimator is therefore **consistently biased**: the bias is confined to pixels
+//! containing such an edge and vanishes as the number of samples grows only in the
+//! sense that the estimate converges to a slightly different filter of the image there;
+//! on static animations (and everywhere else) the landing density is uniform and the
+//! result is unbiased.
+//!
+//! MIS weights are those computed in f. They are the weights of the densities the sample
+//! was drawn with (f's camera sampled x1, f's view sampled the continuation), and the
+//! strategies t ≥ 2 and t = 1 partition each path's contribution exactly when g's camera
+//! samples x1 with f's density, i.e. whenever the camera does not move between f and g.
+//! **Deviation:** with a moving camera the t = 1 weights (computed with g's camera) and
+//! the kept t ≥ 2 weights (f's camera) no longer sum exactly to one; the error is the
+//! change in the light-tracing weight between the two views, small where light tracing
+//! carries little (it is largest on caustics seen directly).
+//!
+//! # Motion blur (`shutter` > 0)
+//!
+//! Every landing also records where the point it shows is seen one frame before and one
+//! after (the sample's x1 moved with its object into those frames and projected by their
+//! cameras, visible or not; an escaped ray's direction for the background), and its value
+//! there when that landing shows the same point (own frame or reuse; a re-traced landing
+//! may show another point, so its radiance is not interpolated). Per pixel of frame g the
+//! films keep the means of these over the landed samples; when g is finished, each pixel's
+//! value is spread over the pixels its trajectory crosses during the shutter
+//! ([`splat_trajectory`], 2D DDA, weight ∝ time ∝ length at constant speed), positions and
+//! radiance linear in time between frames. **Deviation from a per-sample splat:** the
+//! trajectory is splatted per pixel of the reconstructed frame, not per sample, because
+//! a landed sample's share of its pixel (1 / samples landed there) is known only when the
+//! window is complete; splatting each sample as it lands would weight pixels by landing
+//! density (which doubles where the scene's motion brings samples of two frames onto the
+//! same point). Consequences: a pixel showing two differently moving surfaces spreads its
+//! mean along their mean trajectory; only points visible at the frame instant are spread,
+//! so background revealed during the shutter is missing from the blur (as in the paper);
+//! light-tracing splats are not blurred. Needs K ≥ 1 (the neighbouring frames); at the
+//! ends of the render list the trajectory is extrapolated from the frame on the other
+//! side. Test: a quad moving at constant speed against the analytic box⊗box blur
+//! (`tests/it/blur.rs`).
+//!
+//! # Memory
+//!
+//! Samples are not stored: each is made, landed in every frame of its window and
+//! dropped. What stays is the open frames' films (value, square, splat, and four motion
+//! films with motion blur) in [`WindowFilm`]s sharing `film_budget_mb` (tiles beyond it go
+//! to a disk cache), the 2K + 2 scenes of the frame source, and one batch of
+//! `TILES_PER_BATCH` tiles of contributions: bounded whatever the resolution and frame
+//! count.
+//!
+//! Orthographic cameras: samples serve only their own frame (the landing test needs a
+//! pinhole). The window holds at most [`MAX_WINDOW_FRAMES`] frames (K ≤ 31).
+
+use crate::bdpt::BdptSettings;
+use crate::integrator::RenderedFrame;
+use crate::sequence::{ReuseStats, SequenceRenderer};
+use crate::temporal::window_film::{FilmStats, WindowFilm};
+use chronolux_core::accel::multi_frame::MAX_WINDOW_FRAMES;
+#[cfg(doc)]
+use chronolux_core::accel::multi_frame::MultiFrameAccel;
+use chronolux_core::color::Rgb;
+use chronolux_core::scene::source::FrameSource;
+use chronolux_core::stats::Stats;
+use motion::splat_pixel_trajectories;
+use std::collections::BTreeMap;
+#[cfg(doc)]
+use {
+    crate::temporal::blur::splat_trajectory, chronolux_core::bsdf::Bsdf,
+    chronolux_core::scene::delta::FrameDelta,
+};
+
+mod generation;
+mod landing;
+mod motion;
+mod reuse;
+
+/// Settings of [`Stbpt`].
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StbptSettings {
+    /// The per-sample estimator (samples per pixel generated per frame, depth, MIS, seed).
+    pub bdpt: BdptSettings,
+    /// Half-width K of the window [f − K, f + K] a sample serves (0 = frame by frame).
+    /// Default 4.
+    /// At most 31.
+    pub window: u32,
+    /// Motion blur: fraction of the frame interval the shutter is open, centred on the
+    /// frame time (0 = off). Each landed sample's trajectory is splatted (see "Motion
+    /// blur" in the module doc). Default 0. Not a light-transport setting: set from the
+    /// run's shutter when built, so it is not serialised with the technique's settings.
+    #[serde(skip)]
+    pub shutter: f32,
+    /// Memory budget of the accumulation films in MiB (all open frames together); tiles
+    /// beyond it go to a disk cache ([`WindowFilm::with_budget`]). Default 512.
+    #[serde(default = "default_film_budget")]
+    pub film_budget_mb: u64,
+}
+
+fn default_film_budget() -> u64 {
+    512
+}
+
+impl Default for StbptSettings {
+    fn default() -> Self {
+        StbptSettings {
+            bdpt: BdptSettings::default(),
+            window: 4,
+            shutter: 0.0,
+            film_budget_mb: default_film_budget(),
+        }
+    }
+}
+
+/// Tiles of 16² pixels whose samples are made in one parallel batch before their
+/// contributions are merged into the films: bounds the memory of in-flight contributions
+/// (≈ 1024 tiles × 256 px × (2K + 1) frames × 3 films × 28 B ≈ 200 MB at K = 4) whatever
+/// the resolution.
+const TILES_PER_BATCH: usize = 1024;
+
+/// Salts separating a sample's light and connection streams from its camera stream.
+const LIGHT_STREAM: u64 = 0x9e37_79b9_7f4a_7c15;
+const CONNECTION_STREAM: u64 = 0xc2b2_ae3d_27d4_eb4f;
+
+/// What an output frame received so far.
+#[derive(Clone, Debug, Default)]
+struct Pending {
+    stats: Stats,
+    landed: u64,
+    reused: u64,
+    partial: u64,
+    retraced: u64,
+    invalid: u64,
+}
+
+/// Spatio-temporal BDPT; see the module documentation.
+pub struct Stbpt {
+    pub settings: StbptSettings,
+    film: Option<WindowFilm>,
+    /// Squares of the landed values (per-pixel variance of the weighted mean).
+    film_sq: Option<WindowFilm>,
+    /// Light-tracing splats (kept apart so the variance above is that of the landed
+    /// samples).
+    film_splat: Option<WindowFilm>,
+    /// Motion blur: per pixel, the mean offsets and values of the landed samples in the
+    /// neighbouring frames (empty without motion blur).
+    film_blur: Vec<WindowFilm>,
+    /// Index in the render list of the next frame to generate.
+    next: usize,
+    pending: BTreeMap<u32, Pending>,
+    /// Mean number of frames served by the samples generated for each frame.
+    served: BTreeMap<u32, f64>,
+    last_output: Option<u32>,
+}
+
+impl Stbpt {
+    pub fn new(settings: StbptSettings) -> Self {
+        Stbpt {
+            settings,
+            film: None,
+            film_sq: None,
+            film_splat: None,
+            film_blur: Vec::new(),
+            next: 0,
+            pending: BTreeMap::new(),
+            served: BTreeMap::new(),
+            last_output: None,
+        }
+    }
+
+    fn k(&self) -> u32 {
+        self.settings.window.min((MAX_WINDOW_FRAMES as u32 - 1) / 2)
+    }
+
+    /// Creates the films on first use: the memory budget is shared by the four films in
+    /// proportion to what a pixel costs in each (the blur film only holds tiles when
+    /// motion blur is on).
+    fn open_films(&mut self, w: u32, h: u32) {
+        if self.film.is_some() {
+            return;
+        }
+        let budget = self.settings.film_budget_mb.max(1) << 20;
+        let blur = if self.settings.shutter > 0.0 { 4 } else { 0 };
+        let each = budget / (3 + blur);
+        self.film = Some(WindowFilm::with_budget(w, h, each, None));
+        self.film_sq = Some(WindowFilm::with_budget(w, h, each, None));
+        self.film_splat = Some(WindowFilm::with_budget(w, h, each, None));
+        self.film_blur = (0..blur)
+            .map(|_| WindowFilm::with_budget(w, h, each, None))
+            .collect();
+    }
+
+    /// Peak bytes held in memory by the films and their cache traffic (summed over the
+    /// films; the peaks of different films may not coincide, so this is an upper bound).
+    pub fn film_stats(&self) -> FilmStats {
+        let mut t = FilmStats::default();
+        let films = [&self.film, &self.film_sq, &self.film_splat];
+        for f in films.into_iter().flatten().chain(&self.film_blur) {
+            let s = f.stats();
+            t.peak_bytes += s.peak_bytes;
+            t.tile_hits += s.tile_hits;
+            t.tile_misses += s.tile_misses;
+            t.bytes_written += s.bytes_written;
+            t.bytes_read += s.bytes_read;
+            t.io_seconds += s.io_seconds;
+            t.tiles_written += s.tiles_written;
+            t.budget_bytes = t.budget_bytes.saturating_add(s.budget_bytes);
+        }
+        t
+    }
+}
+
+impl SequenceRenderer for Stbpt {
+    fn name(&self) -> &'static str {
+        "stbpt"
+    }
+
+    fn render_frame(
+        &mut self,
+        source: &mut FrameSource,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        let k = self.k();
+        source.reserve(2 * k as usize + 2);
+        let list = source.frames().to_vec();
+        // Frames come in increasing order; a request for an earlier frame starts over
+        // (the open frames are dropped, the samples regenerated).
+        if self.last_output.is_some_and(|l| frame <= l) {
+            *self = Stbpt::new(self.settings.clone());
+        }
+        if self.next == 0 {
+            self.next = list.partition_point(|&g| g.saturating_add(k) < frame);
+        }
+        self.last_output = Some(frame);
+        while self.next < list.len() && list[self.next] <= frame.saturating_add(k) {
+            let f = list[self.next];
+            self.generate(source, f, progress);
+            self.next += 1;
+        }
+        let window = source.window(frame, k, k).len().max(1) as u32;
+        let spp = self.settings.bdpt.spp;
+        let scene = source.frame(frame);
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let splat_scale = 1.0 / (spp as f32 * window as f32);
+        self.open_films(w, h);
+        let (mut means, weights) = self.film.as_mut().expect("opened").finish(frame, 0.0);
+        let (squares, _) = self.film_sq.as_mut().expect("opened").finish(frame, 0.0);
+        let (splats, _) = self
+            .film_splat
+            .as_mut()
+            .expect("opened")
+            .finish(frame, splat_scale);
+        if self.settings.shutter > 0.0 {
+            let blur: Vec<Vec<Rgb>> = self
+                .film_blur
+                .iter_mut()
+                .map(|f| f.finish(frame, 0.0).0)
+                .collect();
+            means = splat_pixel_trajectories(&means, &weights, &blur, w, h, self.settings.shutter);
+        }
+        // Variance of the mean of the landed samples, (E[v²] − E[v]²)/(n − 1); the splats'
+        // share is not included (they are summed over many light subpaths).
+        let variance = means
+            .iter()
+            .zip(&squares)
+            .zip(&weights)
+            .map(|((&m, &sq), &n)| {
+                if n > 1.0 {
+                    (sq - m * m).max(Rgb::ZERO) / (n - 1.0)
+                } else {
+                    Rgb::ZERO
+                }
+            })
+            .collect();
+        let pixels = means.iter().zip(&splats).map(|(&m, &s)| m + s).collect();
+        let p = self.pending.remove(&frame).unwrap_or_default();
+        let npix = (w as f64 * h as f64).max(1.0);
+        let reuse = ReuseStats {
+            window,
+            effective_spp: p.landed as f64 / npix,
+            reused: p.reused,
+            reused_partially: p.partial,
+            retraced: p.retraced,
+            reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
+            light_subpaths_per_pixel: spp as f64 * window as f64,
+            film: self.film_stats(),
+        };
+        self.served.retain(|&f, _| f + k >= frame);
+        RenderedFrame {
+            width: w,
+            height: h,
+            pixels,
+            variance,
+            stats: p.stats,
+            invalid_samples: p.invalid,
+            report: [(
+                "reuse".to_string(),
+                serde_json::to_value(reuse).expect("serialisable"),
+            )]
+            .into_iter()
+            .collect(),
+        }
+    }
+}
+
+/// Registry entry of `stbpt`; the shutter is the run's ([`BuildContext`](crate::registry::BuildContext)).
+pub static TECHNIQUE: crate::registry::Preset<StbptSettings> = crate::registry::Preset {
+    name: "stbpt",
+    summary: "spatio-temporal BDPT: each sample reused in the frames of a window [f-K, f+K]",
+    capabilities: crate::registry::Capabilities {
+        motion_blur: true,
+        photons: false,
+        window: true,
+        stateless: false,
+        effort: crate::registry::Effort {
+            key: "spp",
+            per_unit: 1,
+            unit: "samples per pixel generated per frame",
+        },
+    },
+    defaults: StbptSettings::default,
+    build: |mut s, ctx, _| {
+        s.shutter = ctx.shutter;
+        Box::new(Stbpt::new(s))
+    },
+};

@@ -1,0 +1,120 @@
+//! Reuse: the value a landed sample gives window frame g (module doc, "Reuse in frame g",
+//! steps 2 and 3): f's view-independent part at x1 re-evaluated for g's view, with the
+//! strategies s ≥ 2 recomputed against g's light subpath when only that changed
+//! ([`reused_value`](Generation::reused_value)); or plain BDPT strategies in g's scene
+//! ([`camera_strategies`](Generation::camera_strategies)) when the sample is re-traced.
+
+use super::generation::{Entry, Generation};
+use crate::bdpt::{Vertex, connect};
+use chronolux_core::bsdf::TransportMode;
+use chronolux_core::color::Rgb;
+use chronolux_core::geometry::Ray;
+use chronolux_core::sampling::sampler::PixelSampler;
+use chronolux_core::stats::Stats;
+
+impl Generation<'_> {
+    /// The value in window frame `j` of a sample reused at its first eye vertex `v`
+    /// (which is where it was in f): `Le(x1 → wo_g)·w_e + Σ_k V_k(g) f(x1, wo_g, wi_k) ⊙
+    /// R_k` over the `entries` split off in f (`emission`: x1's own emitted radiance and
+    /// its MIS weight). With `regenerated` = (g's light subpath, f's camera subpath, its
+    /// rays), only the entries s ≤ 1 are reused and the strategies s ≥ 2 are recomputed by
+    /// connecting f's camera subpath (reproduced in g) to g's light subpath in g's scene,
+    /// split at x1 the same way (partial reuse).
+    #[allow(clippy::too_many_arguments)] // reason: the sample's parts and the output
+    pub(super) fn reused_value(
+        &self,
+        j: usize,
+        v: &Vertex,
+        emission: Option<(Rgb, f32)>,
+        entries: &[Entry],
+        regenerated: Option<(&[Vertex], &[Vertex], &[Ray])>,
+        ns: &PixelSampler,
+        st: &mut Stats,
+    ) -> Rgb {
+        let scene_g = &self.scenes[j];
+        let eye = scene_g.camera.position();
+        let max_segments = self.bdpt.depth() as usize;
+        let reuse = regenerated.is_none();
+        let sv = v.surface.as_ref().unwrap();
+        let wo_g = (eye - v.p).normalize_or_zero();
+        let mut l = emission.map_or(Rgb::ZERO, |(_, wm)| scene_g.emitted(&sv.si, wo_g) * wm);
+        for e in entries {
+            if e.vis >> j & 1 == 1 && (reuse || e.s <= 1) {
+                l += sv.bsdf.f(wo_g, e.wi, TransportMode::Radiance) * e.r;
+            }
+        }
+        if let Some((light_g, cam, cam_rays)) = regenerated {
+            // s ≥ 2: f's camera subpath (reproduced in g) connected to g's light
+            // subpath in g's scene, split at x1 like the entries.
+            let same_view = wo_g == sv.wo;
+            let mut sampler = ns.clone();
+            for t in 2..=cam.len() {
+                for s in 2..=light_g.len() {
+                    if s + t - 1 > max_segments {
+                        continue;
+                    }
+                    let Some(c) = connect(scene_g, self.bdpt, light_g, cam, s, t, &mut sampler, st)
+                    else {
+                        continue;
+                    };
+                    if same_view {
+                        l += c.l;
+                        continue;
+                    }
+                    let wi = if t == 2 {
+                        (light_g[s - 1].p - v.p).normalize_or_zero()
+                    } else {
+                        cam_rays[1].d.normalize()
+                    };
+                    let fv = sv.bsdf.f(sv.wo, wi, TransportMode::Radiance);
+                    let fg = sv.bsdf.f(wo_g, wi, TransportMode::Radiance);
+                    l += Rgb::new(
+                        if fv.x != 0.0 {
+                            c.l.x / fv.x * fg.x
+                        } else {
+                            0.0
+                        },
+                        if fv.y != 0.0 {
+                            c.l.y / fv.y * fg.y
+                        } else {
+                            0.0
+                        },
+                        if fv.z != 0.0 {
+                            c.l.z / fv.z * fg.z
+                        } else {
+                            0.0
+                        },
+                    );
+                }
+            }
+        }
+        l
+    }
+
+    /// Sum of the t ≥ 2 strategies of `camera` and `light` in frame `j` (plain BDPT).
+    pub(super) fn camera_strategies(
+        &self,
+        j: usize,
+        light: &[Vertex],
+        camera: &[Vertex],
+        conn: &PixelSampler,
+        stats: &mut Stats,
+    ) -> Rgb {
+        let scene = &self.scenes[j];
+        let max_segments = self.bdpt.depth() as usize;
+        let mut sampler = conn.clone();
+        let mut l = Rgb::ZERO;
+        for t in 2..=camera.len() {
+            for s in 0..=light.len() {
+                if s + t - 1 > max_segments {
+                    continue;
+                }
+                if let Some(c) = connect(scene, self.bdpt, light, camera, s, t, &mut sampler, stats)
+                {
+                    l += c.l;
+                }
+            }
+        }
+        l
+    }
+}

@@ -1,0 +1,106 @@
+//! Optional denoising with Intel Open Image Denoise (`--denoise`), behind the cargo
+//! feature `oidn` (the default build stays free of it; README: "Denoising").
+//!
+//! The beauty is filtered by OIDN's `RT` filter in HDR mode with the first-hit albedo and
+//! shading normal of the run's render passes ([`chronolux_render::aov`]) as auxiliary
+//! images; the noisy beauty is kept as a layer of the EXR (`ViewLayer.Noisy Image`).
+
+use chronolux_core::color::Rgb;
+use chronolux_render::aov::Aovs;
+
+/// Whether this build can denoise.
+pub const AVAILABLE: bool = cfg!(feature = "oidn");
+
+/// Why `--denoise` cannot be used in this build (`None`: it can).
+pub fn unavailable() -> Option<&'static str> {
+    (!AVAILABLE).then_some(
+        "--denoise needs a build with Open Image Denoise: `cargo build --release --features oidn` with OIDN_DIR set to an OIDN install (README, \"Denoising\")",
+    )
+}
+
+fn flat3(v: impl Iterator<Item = [f32; 3]>) -> Vec<f32> {
+    v.flatten().collect()
+}
+
+/// The beauty `pixels` denoised with the albedo and normal passes of `aovs`.
+#[cfg(feature = "oidn")]
+pub fn denoise(pixels: &[Rgb], aovs: &Aovs) -> Result<Vec<Rgb>, String> {
+    let (w, h) = (aovs.width as usize, aovs.height as usize);
+    if pixels.len() != w * h || aovs.albedo.len() != w * h || aovs.normal.len() != w * h {
+        return Err("denoise: the beauty, albedo and normal differ in size".into());
+    }
+    let color = flat3(pixels.iter().map(|p| [p.x, p.y, p.z]));
+    let albedo = flat3(aovs.albedo.iter().map(|p| [p.x, p.y, p.z]));
+    let normal = flat3(aovs.normal.iter().map(|n| [n.x, n.y, n.z]));
+    let mut out = vec![0.0f32; color.len()];
+    let device = oidn::Device::new().map_err(|e| format!("Open Image Denoise: {e:?}"))?;
+    let mut filter =
+        oidn::RayTracing::try_new(&device).map_err(|e| format!("Open Image Denoise: {e:?}"))?;
+    filter
+        .hdr(true)
+        .image_dimensions(w, h)
+        .albedo_normal(&albedo, &normal);
+    filter
+        .filter(&color, &mut out)
+        .map_err(|e| format!("Open Image Denoise: {e:?}"))?;
+    Ok(out
+        .chunks_exact(3)
+        .map(|c| Rgb::new(c[0], c[1], c[2]))
+        .collect())
+}
+
+/// Without the `oidn` feature there is no denoiser; [`unavailable`] stops `--denoise`
+/// before any rendering, so this is never reached.
+#[cfg(not(feature = "oidn"))]
+pub fn denoise(pixels: &[Rgb], aovs: &Aovs) -> Result<Vec<Rgb>, String> {
+    let _ = (pixels, aovs, flat3(std::iter::empty()));
+    Err(unavailable().unwrap_or_default().to_string())
+}
+
+/// The EXR channels of the passes (see `chronolux_render::aov` for the conventions):
+/// Blender's multilayer names `ViewLayer.<pass>.<channel>`.
+pub fn pass_channels(aovs: &Aovs) -> Vec<(String, Vec<f32>)> {
+    let mut out = Vec::new();
+    let mut push = |pass: &str, chans: &[&str], get: &dyn Fn(usize, usize) -> f32, n: usize| {
+        for (c, name) in chans.iter().enumerate() {
+            out.push((
+                format!("ViewLayer.{pass}.{name}"),
+                (0..n).map(|k| get(k, c)).collect(),
+            ));
+        }
+    };
+    let n = (aovs.width * aovs.height) as usize;
+    if !aovs.albedo.is_empty() {
+        push(
+            "Denoising Albedo",
+            &["R", "G", "B"],
+            &|k, c| aovs.albedo[k][c],
+            n,
+        );
+    }
+    if !aovs.normal.is_empty() {
+        push(
+            "Denoising Normal",
+            &["X", "Y", "Z"],
+            &|k, c| aovs.normal[k][c],
+            n,
+        );
+    }
+    if !aovs.depth.is_empty() {
+        push("Depth", &["Z"], &|k, _| aovs.depth[k], n);
+    }
+    if !aovs.motion_prev.is_empty() {
+        push(
+            "Vector",
+            &["X", "Y", "Z", "W"],
+            &|k, c| match c {
+                0 => aovs.motion_prev[k].x,
+                1 => aovs.motion_prev[k].y,
+                2 => aovs.motion_next[k].x,
+                _ => aovs.motion_next[k].y,
+            },
+            n,
+        );
+    }
+    out
+}

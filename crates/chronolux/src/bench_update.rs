@@ -29,6 +29,7 @@ use crate::scene_input;
 use anyhow::{Context, Result, bail};
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::math::Vec3;
+use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::desc::{
     Animation, AnimationId, Channel, ChannelTarget, Interpolation, Material, MaterialId, Mesh,
     MeshId, Node, NodeId, Primitive, SceneDesc, Trs,
@@ -39,7 +40,6 @@ use chronolux_render::dept::element_map::{ElementAccumulators, FrameElements};
 use chronolux_render::dept::reconstruct::{Filter, Neighbours, filter_with};
 use chronolux_render::registry;
 use chronolux_render::run::cpu_seconds;
-use chronolux_render::spt::delta::SceneChanges;
 use chronolux_render::spt::pool::{Budget, SptState};
 use chronolux_render::spt::{Order, SptSettings};
 use clap::Args;
@@ -282,7 +282,7 @@ fn run_in_pool(a: UpdateArgs) -> Result<()> {
     if !mesh.matches(&sb) || sa.lights.len() != sb.lights.len() {
         bail!("the change alters the scene's topology; spt cannot update across it");
     }
-    let changes = SceneChanges::between(&sa, &sb);
+    let changes = FrameDelta::between(&sa, &sb);
     let radius = match base.filter {
         Filter::Gaussian { radius } => radius,
         _ => 2.5,

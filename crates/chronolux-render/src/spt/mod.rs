@@ -31,7 +31,7 @@
 //! - **Pilots**: members `0 .. p` of every group, `p = max(1, round(pilot_fraction ·
 //!   Z/N_g))` (default 7 %), are re-traced after every change. A pilot invalidates its
 //!   group when its stored (old) or new path touches an instance, light or material that
-//!   changed ([`delta::SceneChanges`], to be replaced by `FrameDelta`), or when the two
+//!   changed ([`FrameDelta`](chronolux_core::scene::delta::FrameDelta)), or when the two
 //!   paths differ (light, vertex count, instance, material, triangle, element side, kind,
 //!   or power by more than `path_tolerance` relative). Pilots are brought up to date at
 //!   once; [`pool::SptState::audit`] counts the misses (stale groups whose pilots saw
@@ -77,7 +77,6 @@
 //! - The path scan and per-photon re-shooting above (both settings; `--set
 //!   scan_paths=false --set reshoot=group` is the paper's detector and granularity).
 
-pub mod delta;
 pub mod groups;
 pub mod pool;
 pub mod view;
@@ -252,7 +251,7 @@ impl Spt {
     fn advance(&mut self, scene: Arc<FrameScene>) -> (UpdateStats, bool) {
         match &mut self.state {
             Some(st) if st.accepts(&scene) => {
-                let changes = delta::SceneChanges::between(st.scene(), &scene);
+                let changes = chronolux_core::scene::delta::FrameDelta::between(st.scene(), &scene);
                 let budget = self.settings.frame_budget(st.layout.photons());
                 (st.update(scene, &changes, budget), false)
             }

@@ -1,7 +1,6 @@
 //! The photon pool, its signed element solution, the pilots, the queue of invalid groups
 //! and the update step ([`SptState`]).
 
-use super::delta::SceneChanges;
 use super::groups::{GroupLayout, used_dims};
 use super::{Order, SptSettings};
 use crate::dept::element_map::{
@@ -14,6 +13,7 @@ use chronolux_core::geometry::Bounds3;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::hash_words;
+use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -56,8 +56,12 @@ pub struct PhotonRecord {
 impl PhotonRecord {
     /// The path touches something `changes` reports changed (its light, the instance or
     /// the material of a vertex).
-    pub fn touches(&self, changes: &SceneChanges) -> bool {
-        (self.light != NONE && changes.light_changed(self.light as usize))
+    ///
+    /// `selection_changed`: the light selection probabilities differ between the two
+    /// scenes (some light's power changed), which changes every photon's light choice
+    /// and power: then every path that left a light touches the change.
+    pub fn touches(&self, changes: &FrameDelta, selection_changed: bool) -> bool {
+        (self.light != NONE && (selection_changed || changes.light_changed(self.light as usize)))
             || self.vertices.iter().any(|v| {
                 changes.instance_changed(v.instance as usize)
                     || changes.material_changed(v.material as usize)
@@ -183,7 +187,7 @@ pub fn segment_hits_box(o: Vec3, d: Vec3, t_max: f32, b: &Bounds3) -> bool {
 }
 
 /// World bounds, in `scene`, of every instance `changed` says changed (slightly padded).
-pub fn changed_instance_bounds(scene: &FrameScene, changes: &SceneChanges) -> Vec<Bounds3> {
+pub fn changed_instance_bounds(scene: &FrameScene, changes: &FrameDelta) -> Vec<Bounds3> {
     let xf = geometry_transforms(scene);
     let n = scene.accel.instances().len();
     let mut boxes: Vec<Option<Bounds3>> = vec![None; n];
@@ -536,12 +540,12 @@ impl SptState {
     }
 
     /// Takes `scene` as the new current scene (`changes`: what differs from the current
-    /// one, see [`super::delta`]), traces the pilots and queues the groups they
+    /// one, [`FrameDelta::between`]), traces the pilots and queues the groups they
     /// invalidate, then re-shoots queued groups within `budget`.
     pub fn update(
         &mut self,
         scene: Arc<FrameScene>,
-        changes: &SceneChanges,
+        changes: &FrameDelta,
         budget: Budget,
     ) -> UpdateStats {
         let mut st = self.invalidate(scene, changes);
@@ -551,12 +555,14 @@ impl SptState {
     }
 
     /// The first half of [`SptState::update`]: new scene, pilots, queue.
-    pub fn invalidate(&mut self, scene: Arc<FrameScene>, changes: &SceneChanges) -> UpdateStats {
+    pub fn invalidate(&mut self, scene: Arc<FrameScene>, changes: &FrameDelta) -> UpdateStats {
         let t0 = Instant::now();
         assert!(
             self.accepts(&scene),
             "SptState::invalidate: topology changed"
         );
+        let selection_changed = (0..scene.lights.len())
+            .any(|l| scene.light_sampler.pmf(l) != self.scene.light_sampler.pmf(l));
         self.scene = scene;
         self.epoch += 1;
         self.coverage = self.screen_coverage();
@@ -591,7 +597,10 @@ impl SptState {
                 let g = self.layout.group_of(i) as usize;
                 let old = &self.records[i as usize];
                 let differs = old.differs(&rec, tol);
-                if differs || old.touches(changes) || rec.touches(changes) {
+                if differs
+                    || old.touches(changes, selection_changed)
+                    || rec.touches(changes, selection_changed)
+                {
                     invalid[g] = true;
                 }
                 if differs {
@@ -620,7 +629,8 @@ impl SptState {
                 let hits = parallel::map_chunks(z, 4096, |r| {
                     r.filter(|&i| {
                         let rec = &self.records[i];
-                        i >= first_non_pilot && (rec.touches(changes) || rec.crosses(&boxes))
+                        i >= first_non_pilot
+                            && (rec.touches(changes, selection_changed) || rec.crosses(&boxes))
                     })
                     .collect::<Vec<usize>>()
                 });

@@ -4,11 +4,11 @@
 
 use chronolux_core::color::luminance;
 use chronolux_core::sampling::qmc::halton;
+use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::stage::{caustic, demo};
 use chronolux_render::dept::element_map::FrameElements;
 use chronolux_render::sequence::SequenceRenderer;
-use chronolux_render::spt::delta::SceneChanges;
 use chronolux_render::spt::groups::{COHERENT_DIMS, GroupLayout, toroidal_distance};
 use chronolux_render::spt::pool::{Budget, SignedAccumulators, SptState};
 use chronolux_render::spt::{Order, Spt, SptSettings};
@@ -97,7 +97,7 @@ fn reshooting_in_an_unchanged_scene_leaves_the_solution_equal() {
     let (a, _) = two_frames(demo(), 0, 1);
     let mut st = SptState::new(a.clone(), settings(60_000));
     let before = st.solution.clone();
-    let u = st.update(a.clone(), &SceneChanges::between(&a, &a), Budget::ALL);
+    let u = st.update(a.clone(), &FrameDelta::between(&a, &a), Budget::ALL);
     assert_eq!(u.groups_invalidated, 0);
     assert_eq!(u.photons_traced, 0);
     st.requeue(0..st.layout.groups);
@@ -168,7 +168,7 @@ fn after_draining_the_solution_equals_a_fresh_pass_of_the_new_scene() {
             ..settings(60_000)
         };
         let mut st = SptState::new_on_mesh(a.clone(), s, mesh.clone());
-        let changes = SceneChanges::between(&a, &b);
+        let changes = FrameDelta::between(&a, &b);
         let inv = st.invalidate(b.clone(), &changes);
         assert!(inv.groups_by_pilots > 0);
         let audit = st.audit();
@@ -216,7 +216,7 @@ fn after_draining_the_solution_equals_a_fresh_pass_of_the_new_scene() {
 fn queued_groups_are_exactly_up_to_date_after_draining() {
     let (a, b) = two_frames(demo(), 0, 48);
     let mut st = SptState::new(a.clone(), settings(30_000));
-    st.invalidate(b.clone(), &SceneChanges::between(&a, &b));
+    st.invalidate(b.clone(), &FrameDelta::between(&a, &b));
     let queued: std::collections::HashSet<u64> = (0..st.layout.groups)
         .filter(|&g| {
             // A group is queued iff it is re-shot by the drain below; probe via audit-free
@@ -274,7 +274,7 @@ fn a_removed_occluder_leaves_no_shadow_behind() {
     let (shadowed, _) = sum(&st.solution.direct);
     let u = st.update(
         gone.clone(),
-        &SceneChanges::between(&shown, &gone),
+        &FrameDelta::between(&shown, &gone),
         Budget::ALL,
     );
     assert_eq!(st.queue_len(), 0);

@@ -24,6 +24,9 @@
 //! - `spacetime-dept`: the same photons pooled over a per-element temporal window cut by
 //!   an energy test, completed by a spatial bilateral filter (Weber et al. 2004) —
 //!   [`temporal::spacetime_dept`].
+//! - `spt`: selective photon tracing (Dmitriev et al. 2002): a fixed pool of Halton
+//!   photons in coherent groups on the `dept` elements, only the groups invalidated by a
+//!   change re-shot (signed deposits), found by pilot photons — [`spt`].
 //! - `stbpt`: spatio-temporal BDPT (Havran et al. 2003), each bidirectional sample reused
 //!   in the frames of a window around its own — [`temporal::stbpt`].
 //! - `pm-ic`: photon mapping (global + caustic maps in a k-d tree) with final gathering
@@ -43,4 +46,5 @@ pub mod pt;
 pub mod registry;
 pub mod run;
 pub mod sequence;
+pub mod spt;
 pub mod temporal;

@@ -203,6 +203,7 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
     &crate::temporal::spacetime_dept::TECHNIQUE,
     &crate::pmic::TECHNIQUE,
     &crate::pmic::static_dynamic::TECHNIQUE,
+    &crate::spt::TECHNIQUE,
 ];
 
 /// The technique called `name`, or an error listing the known ones.

@@ -55,7 +55,14 @@ pub enum BenchCommand {
     /// Equal-quality benchmark: time (and flicker) for a method and its baseline to reach
     /// target HDR-FLIP errors against converged references.
     Quality(Box<crate::quality::QualityArgs>),
+    /// Time to a clean image after a change: selective photon tracing (`spt`) in priority
+    /// order against random order and recomputation from scratch. Without arguments: the
+    /// demo, its block jumping across the room.
+    Update(Box<update::UpdateArgs>),
 }
+
+#[path = "bench_update.rs"]
+mod update;
 
 /// Scene choice and common settings of `rays` and `build`.
 #[derive(Args, Debug)]
@@ -138,6 +145,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         BenchCommand::Build(a) => build(a),
         BenchCommand::Pt(a) => pt(a),
         BenchCommand::Quality(a) => crate::quality::run(*a),
+        BenchCommand::Update(a) => update::run(*a),
     }
 }
 

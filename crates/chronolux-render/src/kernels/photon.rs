@@ -6,14 +6,27 @@
 //! `seed`, [`chronolux_core::sampling::qmc::halton`]) with one dimension per decision, in
 //! this fixed order:
 //!
-//! | dimension | decision |
+//! | dimension (base) | decision |
 //! | --- | --- |
-//! | 0 | light choice (power-proportional [`LightSampler`](chronolux_core::light::LightSampler)) |
-//! | 1, 2 | position on the light ([`Light::sample_le`](chronolux_core::light::Light::sample_le) `u_pos`) |
-//! | 3, 4 | direction ([`Light::sample_le`](chronolux_core::light::Light::sample_le) `u_dir`) |
-//! | 5 + 4b | bounce b: BSDF lobe |
-//! | 6 + 4b, 7 + 4b | bounce b: BSDF direction |
-//! | 8 + 4b | bounce b: Russian roulette |
+//! | 0 (2) | light choice *and* first coordinate of the point on the light (see below) |
+//! | 1 (3) | second coordinate of the point on the light ([`Light::sample_le`](chronolux_core::light::Light::sample_le) `u_pos.y`) |
+//! | 2, 3 (5, 7) | emitted direction ([`Light::sample_le`](chronolux_core::light::Light::sample_le) `u_dir`) |
+//! | 4 + 4b, 5 + 4b | bounce b: BSDF direction (bounce 0: bases 11, 13) |
+//! | 6 + 4b | bounce b: BSDF lobe |
+//! | 7 + 4b | bounce b: Russian roulette |
+//!
+//! The coordinates that decide where a photon goes — emission (point, direction) and the
+//! first bounce's direction — take the six lowest prime bases, so that the periodicity of
+//! the Halton sequence (points `i` and `i + m·N_g` agree in dimension `j` to within
+//! `b_j^-k_j` when `b_j^k_j` divides `N_g`, Dmitriev et al. 2002, Eq. 1) makes groups of
+//! photons `i ≡ r (mod N_g)` coherent with a small `N_g` (selective photon tracing,
+//! [`crate::spt`]). The light choice is folded into dimension 0: the power-proportional
+//! [`LightSampler`](chronolux_core::light::LightSampler) inverts its CDF at `u₀` and the
+//! remainder `(u₀ − cdf_l)/pmf_l`, again uniform in [0, 1), is the first coordinate of the
+//! point on the chosen light — the emitters are sampled as one surface, so photons that
+//! agree in dimension 0 leave the same light from nearby points (a separate light-choice
+//! dimension in front, as before, pushed emission to bases 3–11 and the first bounce to
+//! bases 17/19, where the group count needed for coherence explodes).
 //!
 //! Every dimension is consumed whether or not it is used, so photon `index` follows the
 //! same path in any scene where the same decisions lead to the same surfaces: re-tracing
@@ -31,13 +44,15 @@
 //! ## What is reported
 //! Every hit on a surface with a non-delta lobe ("diffuse hit") is reported to the
 //! callback with the power arriving there, before the photon scatters on. Hits on purely
-//! specular (delta) surfaces are not reported.
+//! specular (delta) surfaces are not reported by [`trace_photon`]; [`trace_photon_path`]
+//! reports every vertex (delta ones flagged) and the emitting light, for methods that must
+//! know everything a path touched (selective photon tracing's pilots).
 
 use super::direct::light_radiance_at;
 use chronolux_core::accel::TriRef;
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
-use chronolux_core::geometry::spawn_ray;
+use chronolux_core::geometry::{Ray, spawn_ray};
 use chronolux_core::material;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
@@ -48,11 +63,21 @@ use chronolux_core::scene::frame::FrameScene;
 /// before it except in pathological all-white scenes).
 pub const MAX_BOUNCES: u32 = 64;
 
-/// First Halton dimension of bounce `b`.
+/// First Halton dimension of bounce `b` (its two direction coordinates; the lobe choice
+/// is `bounce_dim(b) + 2`, Russian roulette `bounce_dim(b) + 3`).
 #[inline]
 pub const fn bounce_dim(b: u32) -> usize {
-    5 + 4 * b as usize
+    4 + 4 * b as usize
 }
+
+/// Dimension of the light choice (and the first coordinate of the point on the light).
+pub const LIGHT_DIM: usize = 0;
+/// Dimensions of the point on the light (`LIGHT_DIM` reused after the choice, then this).
+pub const POSITION_DIMS: [usize; 2] = [0, 1];
+/// Dimensions of the emitted direction.
+pub const DIRECTION_DIMS: [usize; 2] = [2, 3];
+/// Dimensions of the first bounce's BSDF direction.
+pub const FIRST_BOUNCE_DIMS: [usize; 2] = [bounce_dim(0), bounce_dim(0) + 1];
 
 /// A photon arriving at a surface with a non-delta lobe.
 #[derive(Clone, Copy, Debug)]
@@ -105,6 +130,17 @@ impl std::ops::AddAssign for PhotonStats {
     }
 }
 
+/// One vertex of a photon path as [`trace_photon_path`] reports it.
+#[derive(Clone, Copy, Debug)]
+pub struct PathVertex {
+    /// The hit, with the power arriving there.
+    pub hit: PhotonHit,
+    /// The surface has a non-delta lobe: [`trace_photon`] reports (deposits) this hit.
+    pub deposited: bool,
+    /// Material of the surface hit (index into [`FrameScene::materials`]).
+    pub material: u32,
+}
+
 /// Traces photon `index` of the stream keyed by `seed` through `scene`, reporting every
 /// diffuse hit to `callback` in path order. Deterministic: the same (scene, index, seed)
 /// always gives the same hits.
@@ -114,9 +150,36 @@ pub fn trace_photon(
     seed: u64,
     mut callback: impl FnMut(&PhotonHit),
 ) -> PhotonStats {
+    trace_photon_path(
+        scene,
+        index,
+        seed,
+        |_, _| {},
+        |v| {
+            if v.deposited {
+                callback(&v.hit)
+            }
+        },
+        |_| {},
+    )
+}
+
+/// [`trace_photon`] reporting everything the path touches: the emitting light (index into
+/// [`FrameScene::lights`]) with the emitted ray, before the first vertex (not called when
+/// nothing is emitted); every vertex, delta (purely specular) ones included; and the ray
+/// that left the scene, if the path ended by missing every surface (`on_escape`). Same
+/// path, same stats.
+pub fn trace_photon_path(
+    scene: &FrameScene,
+    index: u64,
+    seed: u64,
+    mut on_light: impl FnMut(usize, &Ray),
+    mut on_vertex: impl FnMut(&PathVertex),
+    mut on_escape: impl FnMut(&Ray),
+) -> PhotonStats {
     let mut stats = PhotonStats::default();
     let h = |dim: usize| halton(dim, index, seed);
-    let Some((li, pmf, _)) = scene.light_sampler.sample(h(0)) else {
+    let Some((li, pmf, u_pos0)) = scene.light_sampler.sample(h(LIGHT_DIM)) else {
         return stats;
     };
     if pmf <= 0.0 {
@@ -124,8 +187,12 @@ pub fn trace_photon(
     }
     let light = &scene.lights[li];
     let (center, radius) = scene.bounds.bounding_sphere();
-    let Some(les) = light.sample_le(Vec2::new(h(1), h(2)), Vec2::new(h(3), h(4)), center, radius)
-    else {
+    let Some(les) = light.sample_le(
+        Vec2::new(u_pos0, h(POSITION_DIMS[1])),
+        Vec2::new(h(DIRECTION_DIMS[0]), h(DIRECTION_DIMS[1])),
+        center,
+        radius,
+    ) else {
         return stats;
     };
     if les.pdf_pos <= 0.0 || les.pdf_dir <= 0.0 {
@@ -136,21 +203,26 @@ pub fn trace_photon(
     if beta == Rgb::ZERO || !beta.is_finite() {
         return stats;
     }
+    on_light(li, &les.ray);
     let mut ray = les.ray;
     let mut bounces = 0u32;
     let mut all_specular = true;
     loop {
         stats.rays += 1;
         let Some(hit) = scene.intersect(&ray) else {
+            on_escape(&ray);
             break;
         };
         let si = scene.interaction(&hit, &ray);
         let wo = -ray.d.normalize();
         let mat = &scene.materials[si.material as usize];
         let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
-        if bsdf.has_non_delta() {
+        let deposited = bsdf.has_non_delta();
+        if deposited {
             stats.hits += 1;
-            callback(&PhotonHit {
+        }
+        on_vertex(&PathVertex {
+            hit: PhotonHit {
                 index,
                 p: si.p,
                 ng: si.ng,
@@ -162,16 +234,18 @@ pub fn trace_photon(
                 power: beta,
                 bounces,
                 caustic: bounces > 0 && all_specular,
-            });
-        }
+            },
+            deposited,
+            material: si.material,
+        });
         if bounces >= MAX_BOUNCES {
             break;
         }
         let d = bounce_dim(bounces);
         let Some(bs) = bsdf.sample(
             wo,
-            h(d),
-            Vec2::new(h(d + 1), h(d + 2)),
+            h(d + 2),
+            Vec2::new(h(d), h(d + 1)),
             TransportMode::Importance,
         ) else {
             break;

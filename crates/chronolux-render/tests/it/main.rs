@@ -13,6 +13,7 @@ mod multi_frame;
 mod peer;
 mod photon;
 mod pmic;
+mod spt;
 mod stbpt;
 mod window_film;
 

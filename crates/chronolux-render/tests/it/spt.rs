@@ -1,0 +1,372 @@
+//! Selective photon tracing: the Halton group bound (Eq. 1 of Dmitriev et al. 2002) on the
+//! generated points, exact signed deposits, the solution after draining against a fresh
+//! pass, no stale shadow, the pilots' miss rate, and the per-frame budget.
+
+use chronolux_core::color::luminance;
+use chronolux_core::sampling::qmc::halton;
+use chronolux_core::scene::delta::FrameDelta;
+use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::scene::stage::{caustic, demo};
+use chronolux_render::dept::element_map::FrameElements;
+use chronolux_render::sequence::SequenceRenderer;
+use chronolux_render::spt::groups::{COHERENT_DIMS, GroupLayout, toroidal_distance};
+use chronolux_render::spt::pool::{Budget, SignedAccumulators, SptState};
+use chronolux_render::spt::{Order, Spt, SptSettings};
+use std::sync::Arc;
+
+fn settings(photons: u64) -> SptSettings {
+    SptSettings {
+        photons,
+        group_size: 32,
+        elements: 30.0,
+        spp: 1,
+        ..Default::default()
+    }
+}
+
+/// Frames `a` and `b` of `desc` at 24 fps (tiny images: only the photons matter).
+fn two_frames(
+    desc: chronolux_core::scene::desc::SceneDesc,
+    a: u32,
+    b: u32,
+) -> (Arc<FrameScene>, Arc<FrameScene>) {
+    let mut src = crate::source(desc, 16, 16, 24.0, vec![a, b]);
+    (src.frame(a), src.frame(b))
+}
+
+/// Eq. 1: with `N_g = Π b_j^k_j`, every member `r + m·N_g` of group `r` lies within
+/// `b_j^-k_j` of member 0 in coherent dimension `j` — as the photon kernel generates the
+/// points (scrambled, seed 3), on the torus. Tolerance 2e-6: the kernel's points are
+/// `f32` (the radical inverse and the shift are each rounded once, ≤ 6e-8 each); the
+/// smallest cell here is 1/13. Checked for every group and member of two layouts (area
+/// light: six dimensions; punctual light: four), and the bound is not vacuous: some pair
+/// of members spreads over more than half the cell in every coherent dimension.
+#[test]
+fn every_group_satisfies_equation_1_on_the_generated_points() {
+    for (layout, used) in [
+        (GroupLayout::choose(300_000, 64, [true; 6]), [true; 6]),
+        (
+            GroupLayout::choose(100_000, 32, [false, false, true, true, true, true]),
+            [false, false, true, true, true, true],
+        ),
+    ] {
+        assert!(layout.groups * layout.members >= 90_000);
+        let mut spread = [0.0f64; 6];
+        for r in 0..layout.groups {
+            for (j, &dim) in COHERENT_DIMS.iter().enumerate() {
+                if layout.exponents[j] == 0 {
+                    assert!(!used[j] || layout.cell_width(j) == 1.0);
+                    continue;
+                }
+                let w = layout.cell_width(j);
+                let x0 = halton(dim, layout.photon(r, 0), 3) as f64;
+                for m in 1..layout.members {
+                    let x = halton(dim, layout.photon(r, m), 3) as f64;
+                    let d = toroidal_distance(x, x0);
+                    assert!(
+                        d < w + 2e-6,
+                        "group {r} member {m} dim {dim}: {d} ≥ b^-k = {w}"
+                    );
+                    spread[j] = spread[j].max(d / w);
+                }
+            }
+        }
+        for (j, sp) in spread.iter().enumerate() {
+            if layout.exponents[j] > 0 {
+                assert!(*sp > 0.5, "dim {j}: spread {sp}");
+            }
+        }
+    }
+}
+
+fn max_abs_flux(a: &SignedAccumulators) -> f64 {
+    a.flux
+        .iter()
+        .flat_map(|f| f.iter().map(|x| x.abs()))
+        .fold(0.0, f64::max)
+}
+
+/// Re-shooting every group in an unchanged scene subtracts each photon's old deposits
+/// and adds the same new ones: the sums return to themselves up to `f64` rounding. Each
+/// side's sum sees at most ~2·10⁵ additions and subtractions here, each off by at most
+/// 2⁻⁵³ of the running sum: ≤ 3·10⁻¹¹ of the largest sum; the tolerance is 10⁻⁹ of it.
+/// Counts are integers and must be equal exactly. An update with an unchanged scene
+/// queues nothing.
+#[test]
+fn reshooting_in_an_unchanged_scene_leaves_the_solution_equal() {
+    let (a, _) = two_frames(demo(), 0, 1);
+    let mut st = SptState::new(a.clone(), settings(60_000));
+    let before = st.solution.clone();
+    let u = st.update(a.clone(), &FrameDelta::between(&a, &a), Budget::ALL);
+    assert_eq!(u.groups_invalidated, 0);
+    assert_eq!(u.photons_traced, 0);
+    st.requeue(0..st.layout.groups);
+    let d = st.drain(Budget::ALL);
+    assert_eq!(d.groups_reshot, st.layout.groups);
+    assert_eq!(st.queue_len(), 0);
+    for (x, y) in [
+        (&before.direct, &st.solution.direct),
+        (&before.indirect, &st.solution.indirect),
+        (&before.caustic, &st.solution.caustic),
+    ] {
+        assert_eq!(x.count, y.count);
+        let tol = 1e-9 * max_abs_flux(x);
+        for (p, q) in x.flux.iter().zip(&y.flux) {
+            for c in 0..3 {
+                assert!((p[c] - q[c]).abs() <= tol, "{} vs {}", p[c], q[c]);
+            }
+        }
+        let tol_sq = 1e-9 * x.flux_sq.iter().fold(0.0, |m: f64, v| m.max(*v));
+        for (p, q) in x.flux_sq.iter().zip(&y.flux_sq) {
+            assert!((p - q).abs() <= tol_sq);
+        }
+    }
+}
+
+/// Per element side: (indirect + caustic luminance flux sum, its Σφ², area) of a state.
+fn displayed(st: &SptState) -> (Vec<f64>, Vec<f64>, Vec<f32>) {
+    let s = &st.solution;
+    let flux = (0..s.indirect.flux.len())
+        .map(|k| s.indirect.lum(k) + s.caustic.lum(k))
+        .collect();
+    let sq = (0..s.indirect.flux.len())
+        .map(|k| s.indirect.flux_sq[k] + s.caustic.flux_sq[k])
+        .collect();
+    let fe = FrameElements::new(st.scene(), &st.mesh);
+    (flux, sq, fe.area)
+}
+
+/// The demo's block jumps from its first to its last position (frame 0 → 48).
+///
+/// **Miss rate** (item 3): right after the pilots, a full re-trace ([`SptState::audit`])
+/// counts the groups with a changed photon that are not queued. With the pilots alone (the
+/// paper's detector, `scan_paths = false`) the rate is printed, not bounded — it is what
+/// it is for this pool (60k photons, 1260 groups of 48, 3 pilots each) and is reported in
+/// BENCHMARKS.md; with the scan of the stored paths (the default) it must be 0: the scan is
+/// complete by construction (a path changes only if it touched a changed instance, light or
+/// material, or now meets a changed instance, i.e. crosses its new bounds).
+///
+/// **Correctness** (item 5): after the queue is drained, per element side the displayed
+/// (indirect + caustic) flux is tested against a fresh pass of the same photons in the
+/// new scene, with the fresh pass's own standard error there, `√Σφ²`: sides beyond 3
+/// standard errors may hold at most 1 % of the displayed power (a difference below 3σ
+/// cannot be told from the fresh pass's noise; 1 % allows the few sides where a stale
+/// photon lands on an otherwise nearly empty side), and the total displayed power must
+/// agree within 1 % (its own relative standard error with 60k photons is ≈ 0.5 %). With
+/// the default detector the pool is then exactly the fresh pool (every record equal), so
+/// the test has all of its margin.
+#[test]
+fn after_draining_the_solution_equals_a_fresh_pass_of_the_new_scene() {
+    let (a, b) = two_frames(demo(), 0, 48);
+    let mesh = chronolux_render::dept::element_map::ElementMesh::build(&a, 30.0);
+    let fresh = SptState::new_on_mesh(b.clone(), settings(60_000), mesh.clone());
+    let (f_f, sq_f, area) = displayed(&fresh);
+    let total: f64 = f_f.iter().map(|x| x.max(0.0)).sum();
+    for scan in [false, true] {
+        let s = SptSettings {
+            scan_paths: scan,
+            ..settings(60_000)
+        };
+        let mut st = SptState::new_on_mesh(a.clone(), s, mesh.clone());
+        let changes = FrameDelta::between(&a, &b);
+        let inv = st.invalidate(b.clone(), &changes);
+        assert!(inv.groups_by_pilots > 0);
+        let audit = st.audit();
+        eprintln!(
+            "block jump, scan_paths={scan}: {} of {} groups invalidated ({} by {} pilots, {} by the path scan); audit: {audit:?}",
+            inv.groups_invalidated,
+            st.layout.groups,
+            inv.groups_by_pilots,
+            inv.pilots_traced,
+            inv.groups_by_scan
+        );
+        assert!(audit.stale_groups > 0);
+        if scan {
+            assert_eq!(audit.missed_groups, 0);
+        }
+        st.drain(Budget::ALL);
+        assert_eq!(st.queue_len(), 0);
+        let stale = (0..st.layout.photons())
+            .filter(|&i| st.record(i) != fresh.record(i))
+            .count() as u64;
+        assert_eq!(stale, if scan { 0 } else { audit.missed_photons });
+        let (f_s, _, _) = displayed(&st);
+        let total_s: f64 = f_s.iter().map(|x| x.max(0.0)).sum();
+        let mut beyond = 0.0;
+        for k in 0..f_f.len() {
+            if area[k / 2] > 0.0 && (f_s[k] - f_f[k]).abs() > 3.0 * sq_f[k].sqrt() {
+                beyond += f_f[k].max(f_s[k]).max(0.0);
+            }
+        }
+        eprintln!(
+            "  after draining: {stale} stale photons; total displayed power {total_s:.1} vs fresh {total:.1}; power on sides beyond 3σ: {:.3} %",
+            100.0 * beyond / total
+        );
+        if scan {
+            assert!((total - total_s).abs() <= 0.01 * total);
+            assert!(beyond <= 0.01 * total);
+        }
+    }
+}
+
+/// Groups re-shot by the pilots are exactly up to date: after draining, every photon of
+/// a group that was queued equals its fresh trace in the new scene (bit for bit: same
+/// deterministic kernel, same scene).
+#[test]
+fn queued_groups_are_exactly_up_to_date_after_draining() {
+    let (a, b) = two_frames(demo(), 0, 48);
+    let mut st = SptState::new(a.clone(), settings(30_000));
+    st.invalidate(b.clone(), &FrameDelta::between(&a, &b));
+    let queued: std::collections::HashSet<u64> = (0..st.layout.groups)
+        .filter(|&g| {
+            // A group is queued iff it is re-shot by the drain below; probe via audit-free
+            // comparison after draining instead: record which groups differ now.
+            (0..st.layout.members).any(|m| {
+                let i = st.layout.photon(g, m);
+                m >= st.pilots && {
+                    let (r, _) = chronolux_render::spt::pool::trace_record(&b, &st.mesh, i, 0);
+                    &r != st.record(i)
+                }
+            })
+        })
+        .collect();
+    let audit = st.audit();
+    st.drain(Budget::ALL);
+    let mut fixed = 0;
+    for &g in &queued {
+        let all_fresh = (0..st.layout.members).all(|m| {
+            let i = st.layout.photon(g, m);
+            let (r, _) = chronolux_render::spt::pool::trace_record(&b, &st.mesh, i, 0);
+            &r == st.record(i)
+        });
+        fixed += all_fresh as u64;
+    }
+    // Every stale group is fixed except the missed ones.
+    assert_eq!(fixed + audit.missed_groups, queued.len() as u64);
+}
+
+/// No stale light: in the caustic scene an occluder hangs under the lamp in frame 4 and
+/// is gone (under the floor) in frame 3. Updating a frame-4 pool to frame 3 and draining
+/// must leave no shadow: on the floor under the occluder's footprint the direct-photon
+/// flux (the sharpest shadow) and the displayed indirect flux equal a fresh frame-3
+/// pass's within 4 of the fresh region sum's standard errors (√Σφ², so a 4σ band: a
+/// 1-in-16000 false alarm for Gaussian noise); and the shadow was real: in frame 4 the
+/// region held less than half of frame 3's direct flux.
+#[test]
+fn a_removed_occluder_leaves_no_shadow_behind() {
+    let (shown, gone) = two_frames(caustic(), 4, 3);
+    let mut st = SptState::new(shown.clone(), settings(60_000));
+    let fe = FrameElements::new(&gone, &st.mesh);
+    // Floor sides (normal up, y ≈ 0) within the occluder's footprint (|x|, |z| < 0.2).
+    let region: Vec<usize> = (0..fe.area.len())
+        .filter(|&e| {
+            let c = fe.centroid[e];
+            fe.normal[e].y > 0.9 && c.y.abs() < 1e-3 && c.x.abs() < 0.2 && c.z.abs() < 0.2
+        })
+        .map(|e| 2 * e)
+        .collect();
+    assert!(region.len() > 10, "{} floor sides", region.len());
+    let sum = |a: &SignedAccumulators| -> (f64, f64) {
+        region
+            .iter()
+            .fold((0.0, 0.0), |(s, q), &k| (s + a.lum(k), q + a.flux_sq[k]))
+    };
+    let (shadowed, _) = sum(&st.solution.direct);
+    let u = st.update(
+        gone.clone(),
+        &FrameDelta::between(&shown, &gone),
+        Budget::ALL,
+    );
+    assert_eq!(st.queue_len(), 0);
+    eprintln!("occluder removed: {u:?}");
+    let fresh = SptState::new_on_mesh(gone.clone(), settings(60_000), st.mesh.clone());
+    let (d_s, _) = sum(&st.solution.direct);
+    let (d_f, dq) = sum(&fresh.solution.direct);
+    let stale = (0..st.layout.photons())
+        .filter(|&i| st.record(i) != fresh.record(i))
+        .count();
+    assert_eq!(stale, 0, "the path scan misses nothing");
+    assert!(
+        shadowed < 0.5 * d_f,
+        "no shadow to begin with: {shadowed} vs {d_f}"
+    );
+    assert!(
+        (d_s - d_f).abs() <= 4.0 * dq.sqrt(),
+        "direct flux under the removed occluder {d_s} vs fresh {d_f} (σ {})",
+        dq.sqrt()
+    );
+    let (i_s, _) = sum(&st.solution.indirect);
+    let (i_f, iq) = sum(&fresh.solution.indirect);
+    assert!(
+        (i_s - i_f).abs() <= 4.0 * iq.sqrt(),
+        "indirect flux {i_s} vs fresh {i_f} (σ {})",
+        iq.sqrt()
+    );
+}
+
+/// The per-frame budget: with a budget of 2 % of the pool per frame, the demo's moving
+/// block invalidates more groups than fit, the rest is carried over (reported), each
+/// frame traces at most budget + pilots photons, and the random and scratch orders run.
+#[test]
+fn the_frame_budget_carries_groups_over_and_reports_them() {
+    for order in [Order::Priority, Order::Random, Order::Scratch] {
+        let mut src = crate::source(demo(), 16, 16, 24.0, (0..3).collect());
+        let s = SptSettings {
+            budget_fraction: 0.02,
+            order,
+            ..settings(30_000)
+        };
+        let mut spt = Spt::new(s);
+        let mut carried = Vec::new();
+        for f in 0..3 {
+            let out = spt.render_frame(&mut src, f, &|_| {});
+            let r = &out.report;
+            let z = r["pool"].as_u64().unwrap();
+            if f > 0 {
+                assert!(!r["rebuilt"].as_bool().unwrap());
+                let traced = r["photons_traced"].as_u64().unwrap();
+                let pilots = r["pilots_traced"].as_u64().unwrap();
+                assert!(traced <= pilots + (0.02f64 * z as f64).ceil() as u64);
+            }
+            carried.push(r["groups_carried_over"].as_u64().unwrap());
+            assert!(out.pixels.iter().all(|p| p.is_finite()));
+        }
+        assert!(carried[2] > 0, "{order:?}: {carried:?}");
+        if order == Order::Scratch {
+            // A scratch restart renders with the photons shot so far only.
+            let st = spt.state().unwrap();
+            assert!(st.photons_in_solution() < st.layout.photons());
+        }
+    }
+}
+
+/// The eye pass: a frame of the demo is finite, non-black, and its mean lies within 10 %
+/// of `dept-spatial`'s on the same frame (same elements, filter and camera samples;
+/// differences: glossy reflections traced instead of read from the elements, other
+/// photons. 10 % is loose on purpose: it catches a lost or doubled term — indirect light
+/// is ~30 % of the image — not the methods' small differences).
+#[test]
+fn the_eye_pass_agrees_with_dept_spatial_on_the_mean() {
+    use chronolux_render::dept::{Dept, DeptSettings};
+    use chronolux_render::integrator::Integrator;
+    let mut src = crate::source(demo(), 48, 48, 24.0, vec![0]);
+    let scene = src.frame(0);
+    let mut spt = Spt::new(SptSettings {
+        spp: 16,
+        ..settings(100_000)
+    });
+    let a = spt.render_frame(&mut src, 0, &|_| {});
+    let b = Dept::new(DeptSettings {
+        photons: 100_000,
+        elements: 30.0,
+        spp: 16,
+        ..DeptSettings::spatial()
+    })
+    .render(&scene, 0, &|_| {});
+    let mean = |px: &[chronolux_core::color::Rgb]| {
+        px.iter().map(|p| luminance(*p) as f64).sum::<f64>() / px.len() as f64
+    };
+    let (ma, mb) = (mean(&a.pixels), mean(&b.pixels));
+    eprintln!("mean luminance: spt {ma}, dept-spatial {mb}");
+    assert!(ma > 0.0 && (ma - mb).abs() <= 0.1 * mb);
+}

@@ -36,8 +36,12 @@ pub struct RunConfig {
     pub frames: Vec<u32>,
     /// Fraction of the frame interval the shutter is open (0: no motion blur).
     pub shutter: f32,
-    /// PNG/preview exposure in stops (the EXR is never altered).
-    pub exposure: f32,
+    /// PNG/preview exposure in stops (the EXR is never altered); `null`: automatic, from the
+    /// first frame (see `exposure.rs`; run.json records the value as `auto_exposure`).
+    pub exposure: Option<f32>,
+    /// PNG/preview view transform.
+    #[serde(default)]
+    pub view: chronolux_io::image::View,
 }
 
 /// A `--config` file: a `run.json` (its `settings` are a [`RunConfig`]), a `RunConfig`
@@ -63,6 +67,11 @@ pub struct PartialRun {
     pub frames: Option<Vec<u32>>,
     pub shutter: Option<f32>,
     pub exposure: Option<f32>,
+    pub view: Option<chronolux_io::image::View>,
+    /// Recorded in run.json (the automatic exposure found), not a setting: a replay
+    /// measures it again, identically.
+    #[serde(default, rename = "auto_exposure")]
+    pub _auto_exposure: Option<Value>,
     /// Recorded in run.json but not part of the configuration (images do not depend on it).
     #[serde(default, rename = "threads")]
     pub _threads: Option<Value>,

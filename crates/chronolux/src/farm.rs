@@ -314,6 +314,7 @@ pub fn render_segment(args: RenderArgs) -> Result<()> {
         ("--photons", args.photons.is_some()),
         ("--seed", args.seed.is_some()),
         ("--exposure", args.exposure.is_some()),
+        ("--view", args.view.is_some()),
     ]
     .into_iter()
     .filter(|(_, g)| *g)

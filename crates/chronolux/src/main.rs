@@ -4,6 +4,7 @@ mod bench;
 mod cli;
 mod compare;
 mod config;
+mod exposure;
 mod farm;
 mod info;
 mod quality;

@@ -165,10 +165,11 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
     }
     let fps = args.fps.or(prev.fps).unwrap_or(24.0);
     check_fps_and_depth(fps, args.max_depth)?;
-    let exposure = args.exposure.or(prev.exposure).unwrap_or(0.0);
-    if !exposure.is_finite() {
+    let exposure = args.exposure.or(prev.exposure);
+    if exposure.is_some_and(|e| !e.is_finite()) {
         bail!("--exposure must be a finite number of stops");
     }
+    let view = args.view.or(prev.view).unwrap_or_default();
     let shutter = args.shutter.or(prev.shutter).unwrap_or(0.0);
     chronolux_render::motion_blur::check_shutter(shutter).map_err(anyhow::Error::msg)?;
     let mut flags = Vec::new();
@@ -255,6 +256,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         frames: frames.clone(),
         shutter,
         exposure,
+        view,
     };
     Ok((config, input))
 }
@@ -288,8 +290,22 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
     let mut source = FrameSource::new(builder, fps, source_frames);
 
+    let exposure = match config.exposure {
+        Some(e) => e,
+        None => crate::exposure::first_frame_exposure(
+            desc.clone(),
+            input.animation,
+            input.camera.clone(),
+            (w, h),
+            fps,
+            *config.frames.first().context("no frame to render")?,
+        )?,
+    };
     let mut settings_json = serde_json::to_value(config)?;
     settings_json["threads"] = rayon::current_num_threads().into();
+    if config.exposure.is_none() {
+        settings_json["auto_exposure"] = exposure.into();
+    }
     let mut manifest = Manifest::new(
         std::env::args().collect(),
         settings_json,
@@ -317,7 +333,8 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     let mut disk = DiskSink {
         sink: &sink,
         manifest,
-        exposure: config.exposure,
+        exposure,
+        view: config.view,
         resume: exec.resume,
         owned: exec.segment.as_ref().map(|s| s.owned.clone()),
         warm_up_until: exec
@@ -370,6 +387,7 @@ pub struct DiskSink<'a> {
     pub sink: &'a FrameSink,
     pub manifest: Manifest,
     pub exposure: f32,
+    pub view: chronolux_io::image::View,
     /// Frames already complete in the folder are not needed again.
     pub resume: bool,
     /// A farm segment's own frames (the others are computed, not written).
@@ -399,7 +417,7 @@ impl run::FrameSink for DiskSink<'_> {
             pixels: out.pixels.clone(),
         };
         self.sink
-            .write_frame(f.frame, &image, self.exposure)
+            .write_frame_view(f.frame, &image, self.exposure, self.view)
             .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
         self.manifest
             .upsert_frame(FrameRecord::new(f.frame, f.time_s, f.wall_s, f.record()));
@@ -534,6 +552,7 @@ fn check_resumable(
         "fps",
         "shutter",
         "exposure",
+        "view",
         "animation",
         "camera",
         "stage",

@@ -11,6 +11,7 @@ mod multi_frame;
 mod peer;
 mod photon;
 mod stbpt;
+mod volume;
 mod window_film;
 
 use chronolux_core::scene::desc::SceneDesc;

@@ -7,6 +7,7 @@ mod common;
 mod config;
 mod farm;
 mod info;
+mod kill_resume;
 mod render;
 mod shutter;
 mod stbpt;

@@ -3,6 +3,11 @@
 //! Textures multiply their factors (glTF rule): base colour (sRGB RGB, linear A), metallic
 //! (linear B) and roughness (linear G), transmission (linear R), emission (sRGB RGB).
 //! Normal maps are linear tangent-space normals with `xy` scaled by `normal_scale`.
+//! A volume (`KHR_materials_volume`) absorbs along segments inside the mesh: the BSDF at the
+//! point where such a segment ends, reached from behind, is weighted by the segment's
+//! Beer–Lambert transmittance (see [`bsdf_at`]). Every integrator thereby attenuates
+//! without knowing about media; a connection segment of a bidirectional method that runs
+//! inside a volume between two non-delta (rough glass) vertices is not attenuated.
 
 use crate::bsdf::{Bsdf, Lobes};
 use crate::color::Rgb;
@@ -24,6 +29,10 @@ pub struct ShadingPoint {
     pub tangent: Option<Vec4>,
     /// TEXCOORD_0 and TEXCOORD_1 (zero when absent).
     pub uv: [Vec2; 2],
+    /// World-space length of the ray segment that reached this point from behind the
+    /// surface (against `ng`: from inside a closed mesh), 0 when it came from the front or
+    /// is unknown. A material with a volume absorbs along it (see [`bsdf_at`]).
+    pub interior_distance: f32,
 }
 
 #[inline]
@@ -118,6 +127,15 @@ pub fn bsdf_at(mat: &Material, textures: &[Texture], sp: &ShadingPoint) -> Bsdf 
         mat.specular_color,
         transmission,
     );
+    let mut lobes = lobes;
+    // KHR_materials_volume: the segment that reached this point from inside travelled
+    // through the medium; Beer–Lambert's exp(−σ·d) multiplies whatever continues from here
+    // (transmission out, internal reflection, light sampled here): the BSDF carries it.
+    if let Some(v) = &mat.volume
+        && sp.interior_distance > 0.0
+    {
+        lobes.attenuation = Some(v.transmittance(sp.interior_distance));
+    }
     let (n, tangent) = shading_normal(mat, textures, sp);
     Bsdf {
         frame: Frame::from_normal_tangent(n, tangent),
@@ -170,6 +188,7 @@ mod tests {
             dpdu: Vec3::X,
             tangent: None,
             uv: [Vec2::splat(0.5); 2],
+            interior_distance: 0.0,
         }
     }
 

@@ -19,7 +19,9 @@
 //!   counted in one warning. Non-finite positions are an error;
 //! - materials (metallic-roughness, emissive × `KHR_materials_emissive_strength`,
 //!   `KHR_materials_specular`, `KHR_materials_transmission`, `KHR_materials_ior`,
-//!   `KHR_texture_transform`, alpha mode, double sided), textures decoded to RGBA8 (PNG via
+//!   `KHR_texture_transform`, `KHR_materials_volume` (absorption only: attenuation colour
+//!   and distance; thickness decides volume versus thin-walled), alpha mode, double
+//!   sided), textures decoded to RGBA8 (PNG via
 //!   `png`, JPEG via `zune-jpeg`) with their sampler's wrap modes and magnification filter;
 //! - `KHR_lights_punctual` lights, cameras, skins, and every animation clip, flattened as
 //!   [`Channel`] documents (normalised integer outputs are converted to floats).
@@ -28,8 +30,9 @@
 //! unsupported optional one adds one warning.
 //!
 //! **Default light:** when the scene has no punctual light and no emissive material, a
-//! uniform white environment (`desc.environment = Some(Rgb::splat(1.0))`) is added so the
-//! scene is visible, and a warning says so.
+//! neutral sky-to-ground gradient with a dark backdrop
+//! ([`chronolux_core::scene::desc::default_environment`]) is added so the scene is visible,
+//! and a warning says so.
 
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -53,6 +56,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_texture_transform",
+    "KHR_materials_volume",
 ];
 
 /// Why a glTF file could not be loaded. `Display` is a single line.
@@ -179,8 +183,29 @@ fn load_impl(
     } else {
         (bytes, None)
     };
-    let root: json::Root =
-        serde_json::from_slice(json_bytes).map_err(|e| not_gltf(e.to_string()))?;
+    // Animation channels without `target.node` are valid glTF (the node may be set by an
+    // extension) but gltf-json requires the field: such channels are dropped here, from the
+    // raw JSON, with one warning each; `channel_index` keeps the original indices for the
+    // messages about the remaining channels.
+    let mut warnings = Vec::new();
+    let (root, channel_index): (json::Root, Vec<Vec<usize>>) = {
+        let mut value: serde_json::Value =
+            serde_json::from_slice(json_bytes).map_err(|e| not_gltf(e.to_string()))?;
+        let (dropped, channel_index) = drop_channels_without_node(&mut value);
+        let root = if dropped.is_empty() {
+            // Unchanged document: parse the bytes so errors keep their line and column.
+            serde_json::from_slice(json_bytes)
+        } else {
+            serde_json::from_value(value)
+        }
+        .map_err(|e| not_gltf(e.to_string()))?;
+        for p in dropped {
+            warnings.push(format!(
+                "{p}: channel has no target.node (allowed only for extensions); ignored"
+            ));
+        }
+        (root, channel_index)
+    };
     if !root.asset.version.starts_with("2.") {
         return Err(not_gltf(format!(
             "asset.version is \"{}\", expected 2.x",
@@ -195,7 +220,6 @@ fn load_impl(
             });
         }
     }
-    let mut warnings = Vec::new();
     for ext in &root.extensions_used {
         if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
             warnings.push(format!(
@@ -204,6 +228,43 @@ fn load_impl(
         }
     }
     let mut errors: Vec<(String, String)> = Vec::new();
+    // gltf-json's own validation indexes `accessors` with a primitive's POSITION index
+    // before checking it (gltf-json-1.4.1/src/mesh.rs:151): check it first.
+    for (mi, m) in root.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            if let Some(a) = p
+                .attributes
+                .get(&Checked::Valid(json::mesh::Semantic::Positions))
+                && a.value() >= root.accessors.len()
+            {
+                return Err(LoadError::Invalid {
+                    file,
+                    json_path: format!("meshes[{mi}].primitives[{pi}].attributes.POSITION"),
+                    reason: format!(
+                        "accessor index {} out of bounds ({} accessors)",
+                        a.value(),
+                        root.accessors.len()
+                    ),
+                });
+            }
+        }
+    }
+    // `gltf::Image::source` unwraps the URI when there is no buffer view, and the MIME type
+    // when there is one (gltf-1.4.1/src/image.rs:124-128); neither is validated.
+    for (ii, im) in root.images.iter().enumerate() {
+        let reason = match (&im.buffer_view, &im.uri, &im.mime_type) {
+            (None, None, _) => Some("image has neither uri nor bufferView"),
+            (Some(_), _, None) => Some("image in a bufferView needs a mimeType"),
+            _ => None,
+        };
+        if let Some(reason) = reason {
+            return Err(LoadError::Invalid {
+                file,
+                json_path: format!("images[{ii}]"),
+                reason: reason.into(),
+            });
+        }
+    }
     root.validate(&root, json::Path::new, &mut |path, err| {
         use json::validation::Error as E;
         let p = path().to_string();
@@ -222,6 +283,34 @@ fn load_impl(
             errors.push((p, what.to_string()));
         }
     });
+    // gltf-json's `Animation::validate` checks only sampler indices, not the channel targets,
+    // and `gltf::animation::Target::node` unwraps the node index: check targets here.
+    for (ai, a) in root.animations.iter().enumerate() {
+        for (ci, ch) in a.channels.iter().enumerate() {
+            let ci = channel_index
+                .get(ai)
+                .and_then(|m| m.get(ci))
+                .copied()
+                .unwrap_or(ci);
+            let base = format!("animations[{ai}].channels[{ci}].target");
+            if ch.target.node.value() >= root.nodes.len() {
+                errors.push((
+                    format!("{base}.node"),
+                    format!(
+                        "node index {} out of bounds ({} nodes)",
+                        ch.target.node.value(),
+                        root.nodes.len()
+                    ),
+                ));
+            }
+            if !matches!(ch.target.path, Checked::Valid(_)) {
+                errors.push((
+                    format!("{base}.path"),
+                    "invalid value (expected translation, rotation, scale or weights)".into(),
+                ));
+            }
+        }
+    }
     if let Some((p, e)) = errors.first() {
         let more = if errors.len() > 1 {
             format!(" (and {} more problems)", errors.len() - 1)
@@ -241,6 +330,7 @@ fn load_impl(
         base_dir,
         buffers: Vec::new(),
         warnings,
+        channel_index,
     };
     loader.load_buffers(blob)?;
     let mut desc = loader.build()?;
@@ -254,6 +344,43 @@ struct Loader<'a> {
     base_dir: Option<&'a Path>,
     buffers: Vec<Vec<u8>>,
     warnings: Vec<String>,
+    /// Per animation, the original index of each channel kept (see
+    /// [`drop_channels_without_node`]).
+    channel_index: Vec<Vec<usize>>,
+}
+
+/// Removes from `animations[*].channels` every channel whose `target` has no `node`; returns
+/// the JSON paths of the removed channels and, per animation, the original index of each
+/// channel kept. Anything that is not shaped as expected is left for the typed parse to
+/// report.
+fn drop_channels_without_node(v: &mut serde_json::Value) -> (Vec<String>, Vec<Vec<usize>>) {
+    let mut dropped = Vec::new();
+    let mut index = Vec::new();
+    let Some(anims) = v.get_mut("animations").and_then(|a| a.as_array_mut()) else {
+        return (dropped, index);
+    };
+    for (ai, a) in anims.iter_mut().enumerate() {
+        let mut kept = Vec::new();
+        if let Some(chs) = a.get_mut("channels").and_then(|c| c.as_array_mut()) {
+            let mut ci = 0;
+            chs.retain(|ch| {
+                let i = ci;
+                ci += 1;
+                let no_node = ch
+                    .get("target")
+                    .and_then(|t| t.as_object())
+                    .is_some_and(|t| !t.contains_key("node"));
+                if no_node {
+                    dropped.push(format!("animations[{ai}].channels[{i}]"));
+                } else {
+                    kept.push(i);
+                }
+                !no_node
+            });
+        }
+        index.push(kept);
+    }
+    (dropped, index)
 }
 
 fn percent_decode(s: &str) -> String {
@@ -330,6 +457,18 @@ impl Loader<'_> {
             )
         })?;
         let p = base.join(percent_decode(uri));
+        // Only regular files: a device (`/dev/zero`), a FIFO or a directory named by a
+        // hostile or broken file would hang the read or exhaust memory.
+        match std::fs::metadata(&p) {
+            Ok(m) if !m.is_file() => {
+                return Err(self.resource(
+                    json_path,
+                    uri,
+                    format!("not a regular file ({})", p.display()),
+                ));
+            }
+            _ => {}
+        }
         std::fs::read(&p)
             .map_err(|e| self.resource(json_path, uri, format!("{} ({})", e, p.display())))
     }
@@ -617,9 +756,13 @@ impl Loader<'_> {
 
     fn build(mut self) -> Result<SceneDesc, LoadError> {
         let doc = self.doc;
+        let mut materials = Vec::new();
+        for m in doc.materials() {
+            materials.push(self.load_material(&m));
+        }
         let mut desc = SceneDesc {
             textures: self.load_textures()?,
-            materials: doc.materials().map(|m| self.load_material(&m)).collect(),
+            materials,
             meshes: self.load_meshes()?,
             cameras: doc.cameras().map(|c| load_camera(&c)).collect(),
             ..Default::default()
@@ -754,7 +897,7 @@ impl Loader<'_> {
             .iter()
             .any(|m| m.emissive.max_element() > 0.0);
         if desc.lights.is_empty() && !has_emission {
-            desc.environment = Some(Rgb::splat(1.0));
+            desc.environment = Some(chronolux_core::scene::desc::default_environment());
             self.warnings
                 .push(chronolux_core::scene::desc::DEFAULT_ENVIRONMENT_WARNING.into());
         }
@@ -866,7 +1009,7 @@ impl Loader<'_> {
         Ok(out)
     }
 
-    fn load_material(&self, m: &gltf::Material) -> Material {
+    fn load_material(&mut self, m: &gltf::Material) -> Material {
         let pbr = m.pbr_metallic_roughness();
         let bc = pbr.base_color_factor();
         let strength = m.emissive_strength().unwrap_or(1.0);
@@ -900,6 +1043,32 @@ impl Loader<'_> {
         if let Some(t) = m.transmission() {
             mat.transmission = t.transmission_factor();
             mat.transmission_texture = t.transmission_texture().map(|i| tex_ref(&i));
+        }
+        if let Some(v) = m.volume() {
+            let path = format!(
+                "materials[{}].extensions.KHR_materials_volume",
+                m.index().unwrap_or(0)
+            );
+            let c = Rgb::from(v.attenuation_color()).clamp(Rgb::ZERO, Rgb::ONE);
+            let d = v.attenuation_distance();
+            let absorbs = c != Rgb::ONE && d.is_finite();
+            if !(d > 0.0) {
+                self.warnings.push(format!(
+                    "{path}: attenuationDistance {d} is not positive; volume ignored"
+                ));
+            } else if !(v.thickness_factor() > 0.0) {
+                // The spec: thicknessFactor 0 (its default) is a thin-walled surface.
+                if absorbs {
+                    self.warnings.push(format!(
+                        "{path}: thicknessFactor 0 makes the material thin-walled; attenuation ignored"
+                    ));
+                }
+            } else if absorbs {
+                // Rays measure the real path inside the closed mesh, so thicknessFactor
+                // and thicknessTexture (a rasteriser's stand-in for that path) only decide
+                // volume versus thin-walled.
+                mat.volume = Some(chronolux_core::scene::desc::Volume::from_attenuation(c, d));
+            }
         }
         mat
     }
@@ -975,6 +1144,13 @@ impl Loader<'_> {
             return Err(self.invalid(
                 &ppath,
                 format!("vertex {i} has a NaN or infinite coordinate"),
+            ));
+        }
+        let max = chronolux_core::accel::MAX_COORD;
+        if let Some(i) = positions.iter().position(|v| v.abs().max_element() > max) {
+            return Err(self.invalid(
+                &ppath,
+                format!("vertex {i} lies beyond ±{max:e}, outside what f32 geometry can hold"),
             ));
         }
         let nv = positions.len();
@@ -1122,6 +1298,12 @@ impl Loader<'_> {
             channels: Vec::new(),
         };
         for (ci, ch) in a.channels().enumerate() {
+            let ci = self
+                .channel_index
+                .get(ai)
+                .and_then(|m| m.get(ci))
+                .copied()
+                .unwrap_or(ci);
             let cpath = format!("animations[{ai}].channels[{ci}]");
             let target = ch.target();
             let node = target.node();

@@ -4,7 +4,11 @@
 //!   scanline blocks, ZIP (16 lines) compression, which is lossless: a round trip is bit-exact.
 //!   [`read_exr`] also reads f16/f32 RGB(A) files written by other renderers (Mitsuba 3).
 //! - [`tonemap_srgb8`] / [`write_png`]: display-referred 8-bit sRGB, by exposure and a plain
-//!   clamp (no filmic curve), so a PNG value maps one-to-one to an EXR value ≤ 1.
+//!   clamp (no filmic curve, [`View::Standard`]), so a PNG value maps one-to-one to an EXR
+//!   value ≤ 1; [`tonemap_view_srgb8`] / [`write_png_view`] with a [`View`] (AgX, the
+//!   renderer's default, rolls highlights off softly instead of clipping).
+//! - [`auto_exposure`]: the exposure that puts an image's 90th luminance percentile at a
+//!   fixed display level.
 //! - [`read_png_rgb8`]: 8-bit PNGs back, for tests and comparisons.
 //!
 //! Every write goes through [`crate::output::write_atomic`]: a reader never sees a half-written
@@ -331,6 +335,152 @@ pub fn tonemap_srgb8(image: &Image, exposure: f32) -> Vec<[u8; 3]> {
         .iter()
         .map(|p| [enc(p.x), enc(p.y), enc(p.z)])
         .collect()
+}
+
+/// The view transform from scene-referred linear values (after exposure) to display values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum View {
+    /// A plain clamp to [0, 1], then the sRGB curve (what Blender calls "Standard").
+    Standard,
+    /// AgX (Troy Sobotka's, as Blender 4 ships it by default), in the widely used polynomial
+    /// fit of its base contrast curve ("Minimal AgX", Benjamin Wrensch, 2023): an inset
+    /// matrix, a log2 encoding over [−12.47, +4.03] stops around 1, a sigmoid, the outset
+    /// matrix; the result is display-encoded. Soft highlight roll-off: 16 (4 stops over
+    /// diffuse white) just reaches 1, and bright saturated colours desaturate towards white.
+    #[default]
+    Agx,
+}
+
+impl View {
+    pub fn name(self) -> &'static str {
+        match self {
+            View::Standard => "standard",
+            View::Agx => "agx",
+        }
+    }
+
+    /// Display-encoded value in [0, 1] per channel for linear `c` (exposure applied).
+    pub fn apply(self, c: Rgb) -> Rgb {
+        let c = Rgb::new(nan_to_zero(c.x), nan_to_zero(c.y), nan_to_zero(c.z));
+        match self {
+            View::Standard => Rgb::new(
+                linear_to_srgb(c.x),
+                linear_to_srgb(c.y),
+                linear_to_srgb(c.z),
+            ),
+            View::Agx => agx(c),
+        }
+    }
+}
+
+fn nan_to_zero(v: f32) -> f32 {
+    if v.is_nan() { 0.0 } else { v }
+}
+
+/// AgX base ("Minimal AgX" fit; matrices as published, rows here, sRGB/Rec.709 primaries).
+fn agx(c: Rgb) -> Rgb {
+    const INSET: [[f32; 3]; 3] = [
+        [0.842_479_06, 0.078_433_6, 0.079_223_745],
+        [0.042_328_242, 0.878_468_6, 0.079_166_13],
+        [0.042_375_655, 0.078_433_6, 0.879_143],
+    ];
+    const OUTSET: [[f32; 3]; 3] = [
+        [1.196_879, -0.098_020_88, -0.099_029_74],
+        [-0.052_896_85, 1.151_903_1, -0.098_961_18],
+        [-0.052_971_635, -0.098_043_45, 1.151_073_7],
+    ];
+    const MIN_EV: f32 = -12.473_931;
+    const MAX_EV: f32 = 4.026_069;
+    let mul = |m: &[[f32; 3]; 3], v: Rgb| {
+        Rgb::new(
+            m[0][0] * v.x + m[0][1] * v.y + m[0][2] * v.z,
+            m[1][0] * v.x + m[1][1] * v.y + m[1][2] * v.z,
+            m[2][0] * v.x + m[2][1] * v.y + m[2][2] * v.z,
+        )
+    };
+    let contrast = |x: f32| {
+        let x2 = x * x;
+        let x4 = x2 * x2;
+        15.5 * x4 * x2 - 40.14 * x4 * x + 31.96 * x4 - 6.868 * x2 * x + 0.4298 * x2 + 0.1191 * x
+            - 0.002_32
+    };
+    let encode = |v: f32| {
+        // log2 of 0 (or of a negative value after the inset) is the curve's black.
+        let ev = if v > 0.0 { v.log2() } else { MIN_EV };
+        let t = (ev.clamp(MIN_EV, MAX_EV) - MIN_EV) / (MAX_EV - MIN_EV);
+        contrast(t)
+    };
+    let v = mul(&INSET, c);
+    let v = Rgb::new(encode(v.x), encode(v.y), encode(v.z));
+    let v = mul(&OUTSET, v);
+    v.clamp(Rgb::ZERO, Rgb::ONE)
+}
+
+/// Tone-maps to 8-bit display values: `2^exposure × linear`, then `view`.
+pub fn tonemap_view_srgb8(image: &Image, exposure: f32, view: View) -> Vec<[u8; 3]> {
+    if view == View::Standard {
+        return tonemap_srgb8(image, exposure);
+    }
+    let scale = exposure.exp2();
+    let q = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    image
+        .pixels
+        .iter()
+        .map(|p| {
+            let d = view.apply(*p * scale);
+            [q(d.x), q(d.y), q(d.z)]
+        })
+        .collect()
+}
+
+/// The display level the 90th luminance percentile is put at by [`auto_exposure`]: 0.8 in
+/// linear units, a light but unclipped surface (under AgX it shows at 0.75 display).
+pub const AUTO_EXPOSURE_KEY: f32 = 0.8;
+
+/// The exposure (stops) at which the 90th percentile of the luminance of `pixels` becomes
+/// [`AUTO_EXPOSURE_KEY`]. A high percentile rather than the median: a small model against a
+/// dark backdrop is exposed for the model, not the backdrop, and a sun-lit scene of
+/// thousands of lux for its lit surfaces; the brightest 10% (light sources, highlights)
+/// roll off in the view transform. When that percentile is black, the 99th, then the
+/// maximum is used; an all-black (or non-finite) image gives 0. Clamped to ±24 stops.
+pub fn auto_exposure(pixels: &[Rgb]) -> f32 {
+    let mut lum: Vec<f32> = pixels
+        .iter()
+        .map(|&p| chronolux_core::color::luminance(p))
+        .filter(|l| l.is_finite())
+        .map(|l| l.max(0.0))
+        .collect();
+    if lum.is_empty() {
+        return 0.0;
+    }
+    lum.sort_by(f32::total_cmp);
+    let at = |q: f64| lum[((lum.len() - 1) as f64 * q).round() as usize];
+    let p = [at(0.9), at(0.99), at(1.0)].into_iter().find(|&v| v > 0.0);
+    match p {
+        Some(p) => (AUTO_EXPOSURE_KEY / p).log2().clamp(-24.0, 24.0),
+        None => 0.0,
+    }
+}
+
+/// Writes `image` as an 8-bit PNG through `view` (see [`tonemap_view_srgb8`]), atomically.
+pub fn write_png_view(
+    path: impl AsRef<Path>,
+    image: &Image,
+    exposure: f32,
+    view: View,
+) -> Result<(), ImageError> {
+    let path = path.as_ref();
+    check_size(path, image)?;
+    let rgb8 = tonemap_view_srgb8(image, exposure, view);
+    write_png_rgb8(
+        path,
+        &Rgb8Image {
+            width: image.width,
+            height: image.height,
+            pixels: rgb8,
+        },
+    )
 }
 
 /// Writes `image` as an 8-bit sRGB PNG (RGB, with the `sRGB` chunk, perceptual intent),

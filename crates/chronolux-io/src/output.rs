@@ -14,7 +14,7 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use serde::{Deserialize, Serialize};
 
-use crate::image::{Image, ImageError, Rgb8Image, read_png_rgb8, write_exr, write_png};
+use crate::image::{Image, ImageError, Rgb8Image, read_png_rgb8, write_exr};
 
 /// Name of the manifest file in the output folder.
 pub const MANIFEST_NAME: &str = "run.json";
@@ -361,8 +361,19 @@ impl FrameSink {
     /// Writes `frame_NNNN.exr` (linear) then `frame_NNNN.png` (sRGB, `exposure` stops), each
     /// atomically.
     pub fn write_frame(&self, frame: u32, image: &Image, exposure: f32) -> Result<(), OutputError> {
+        self.write_frame_view(frame, image, exposure, crate::image::View::Standard)
+    }
+
+    /// [`FrameSink::write_frame`] with the PNG made through `view` (the EXR is unaffected).
+    pub fn write_frame_view(
+        &self,
+        frame: u32,
+        image: &Image,
+        exposure: f32,
+        view: crate::image::View,
+    ) -> Result<(), OutputError> {
         write_exr(self.exr_path(frame), image)?;
-        write_png(self.png_path(frame), image, exposure)?;
+        crate::image::write_png_view(self.png_path(frame), image, exposure, view)?;
         Ok(())
     }
 

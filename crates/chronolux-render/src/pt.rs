@@ -80,14 +80,19 @@ impl RadianceEstimator for PathTracer {
             let Some(hit) = scene.intersect(&ray) else {
                 // Escaped: environment light.
                 if let (Some(env), Some(ei)) = (scene.environment, scene.environment_light) {
-                    let w = if specular_bounce {
-                        1.0
+                    if depth == 1 {
+                        // The camera ray itself: the backdrop (no other strategy sees it).
+                        l += beta * env.background;
                     } else {
-                        let pl = scene.light_sampler.pmf(ei)
-                            * scene.lights[ei].pdf_li(prev_p, prev_p + ray.d);
-                        power_heuristic(1.0, prev_pdf, 1.0, pl)
-                    };
-                    l += beta * env * w;
+                        let w = if specular_bounce {
+                            1.0
+                        } else {
+                            let pl = scene.light_sampler.pmf(ei)
+                                * scene.lights[ei].pdf_li(prev_p, prev_p + ray.d);
+                            power_heuristic(1.0, prev_pdf, 1.0, pl)
+                        };
+                        l += beta * env.radiance(ray.d) * w;
+                    }
                 }
                 break;
             };

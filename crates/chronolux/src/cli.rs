@@ -137,9 +137,15 @@ pub struct RenderArgs {
     /// (sRGB), with run.json and preview.gif (and preview.mp4 when ffmpeg is installed).
     #[arg(long, short, default_value = "out", value_name = "DIR")]
     pub output: PathBuf,
-    /// Exposure of the PNG and preview in stops (the EXR is never altered). Default 0.
+    /// Exposure of the PNG and preview in stops (the EXR is never altered). Default:
+    /// automatic, measured once on the first frame (its 90th luminance percentile) and
+    /// kept for the whole sequence; run.json records it as `auto_exposure`.
     #[arg(long, value_name = "EV", allow_negative_numbers = true)]
     pub exposure: Option<f32>,
+    /// View transform of the PNG and preview: `agx` (default; soft highlight roll-off, as
+    /// Blender's default) or `standard` (clamp and sRGB curve). The EXR is never altered.
+    #[arg(long, value_name = "agx|standard", value_parser = parse_view)]
+    pub view: Option<chronolux_io::image::View>,
     /// Skip frames whose EXR and PNG are already complete in the output folder.
     #[arg(long)]
     pub resume: bool,
@@ -189,4 +195,13 @@ with --set KEY=VALUE; an unknown key lists the valid ones.\n",
         s += &format!("\n  {:<16} {}", t.name(), t.summary());
     }
     s
+}
+
+fn parse_view(s: &str) -> Result<chronolux_io::image::View, String> {
+    use chronolux_io::image::View;
+    match s {
+        "agx" => Ok(View::Agx),
+        "standard" => Ok(View::Standard),
+        _ => Err(format!("unknown view `{s}` (agx or standard)")),
+    }
 }

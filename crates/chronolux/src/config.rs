@@ -36,8 +36,12 @@ pub struct RunConfig {
     pub frames: Vec<u32>,
     /// Fraction of the frame interval the shutter is open (0: no motion blur).
     pub shutter: f32,
-    /// PNG/preview exposure in stops (the EXR is never altered).
-    pub exposure: f32,
+    /// PNG/preview exposure in stops (the EXR is never altered); `null`: automatic, from the
+    /// first frame (see `exposure.rs`; run.json records the value as `auto_exposure`).
+    pub exposure: Option<f32>,
+    /// PNG/preview view transform.
+    #[serde(default)]
+    pub view: chronolux_io::image::View,
     /// Render passes written as EXR layers.
     #[serde(default)]
     pub passes: chronolux_render::aov::PassSet,
@@ -71,6 +75,11 @@ pub struct PartialRun {
     pub exposure: Option<f32>,
     pub passes: Option<chronolux_render::aov::PassSet>,
     pub denoise: Option<bool>,
+    pub view: Option<chronolux_io::image::View>,
+    /// Recorded in run.json (the automatic exposure found), not a setting: a replay
+    /// measures it again, identically.
+    #[serde(default, rename = "auto_exposure")]
+    pub _auto_exposure: Option<Value>,
     /// Recorded in run.json but not part of the configuration (images do not depend on it).
     #[serde(default, rename = "threads")]
     pub _threads: Option<Value>,

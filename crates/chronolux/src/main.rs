@@ -5,6 +5,7 @@ mod cli;
 mod compare;
 mod config;
 mod denoise;
+mod exposure;
 mod farm;
 mod info;
 mod quality;

@@ -166,10 +166,11 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
     }
     let fps = args.fps.or(prev.fps).unwrap_or(24.0);
     check_fps_and_depth(fps, args.max_depth)?;
-    let exposure = args.exposure.or(prev.exposure).unwrap_or(0.0);
-    if !exposure.is_finite() {
+    let exposure = args.exposure.or(prev.exposure);
+    if exposure.is_some_and(|e| !e.is_finite()) {
         bail!("--exposure must be a finite number of stops");
     }
+    let view = args.view.or(prev.view).unwrap_or_default();
     let shutter = args.shutter.or(prev.shutter).unwrap_or(0.0);
     chronolux_render::motion_blur::check_shutter(shutter).map_err(anyhow::Error::msg)?;
     let mut flags = Vec::new();
@@ -266,6 +267,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         exposure,
         passes,
         denoise,
+        view,
     };
     Ok((config, input))
 }
@@ -299,8 +301,22 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     let builder = FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
     let mut source = FrameSource::new(builder, fps, source_frames);
 
+    let exposure = match config.exposure {
+        Some(e) => e,
+        None => crate::exposure::first_frame_exposure(
+            desc.clone(),
+            input.animation,
+            input.camera.clone(),
+            (w, h),
+            fps,
+            *config.frames.first().context("no frame to render")?,
+        )?,
+    };
     let mut settings_json = serde_json::to_value(config)?;
     settings_json["threads"] = rayon::current_num_threads().into();
+    if config.exposure.is_none() {
+        settings_json["auto_exposure"] = exposure.into();
+    }
     let mut manifest = Manifest::new(
         std::env::args().collect(),
         settings_json,
@@ -346,7 +362,8 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     let mut disk = DiskSink {
         sink: &sink,
         manifest,
-        exposure: config.exposure,
+        exposure,
+        view: config.view,
         resume: exec.resume,
         denoise: config.denoise,
         keep_passes: config.passes,
@@ -402,6 +419,7 @@ pub struct DiskSink<'a> {
     pub sink: &'a FrameSink,
     pub manifest: Manifest,
     pub exposure: f32,
+    pub view: chronolux_io::image::View,
     /// Frames already complete in the folder are not needed again.
     pub resume: bool,
     /// A farm segment's own frames (the others are computed, not written).
@@ -438,7 +456,7 @@ impl run::FrameSink for DiskSink<'_> {
         match f.aovs {
             None => self
                 .sink
-                .write_frame(f.frame, &image, self.exposure)
+                .write_frame_view(f.frame, &image, self.exposure, self.view)
                 .map_err(|e| format!("writing frame {}: {e}", f.frame))?,
             Some(aovs) => {
                 let mut kept = aovs.clone();
@@ -462,8 +480,13 @@ impl run::FrameSink for DiskSink<'_> {
                 }
                 chronolux_io::image::write_exr_layers(self.sink.exr_path(f.frame), &image, &layers)
                     .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
-                chronolux_io::image::write_png(self.sink.png_path(f.frame), &image, self.exposure)
-                    .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+                chronolux_io::image::write_png_view(
+                    self.sink.png_path(f.frame),
+                    &image,
+                    self.exposure,
+                    self.view,
+                )
+                .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
             }
         }
         self.manifest
@@ -601,6 +624,7 @@ fn check_resumable(
         "exposure",
         "passes",
         "denoise",
+        "view",
         "animation",
         "camera",
         "stage",

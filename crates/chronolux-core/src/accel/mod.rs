@@ -32,6 +32,18 @@ fn oray(o: Vec3A, d: Vec3A, tmax: f32) -> ORay {
     ORay::new(o, d + Vec3A::ZERO, 0.0, tmax)
 }
 
+/// Largest coordinate magnitude the BVH is built over. The builder's surface-area
+/// arithmetic squares extents and sums areas in f32 (max 3.4e38 ≈ (1.8e19)²); beyond about
+/// 1e19 it overflows to infinity and the build breaks (found by fuzzing: a vertex at −1.7e38
+/// tripped obvhs-0.4.0's `bvh2_to_cwbvh.rs:365` assertion). 1e15 leaves eight orders of
+/// magnitude of headroom and is far beyond any real scene in metres. Triangles with a vertex
+/// beyond it (or not finite), and instances whose bounds are, are left out of the frame.
+pub const MAX_COORD: f32 = 1e15;
+
+fn representable(p: Vec3) -> bool {
+    p.is_finite() && p.abs().max_element() <= MAX_COORD
+}
+
 /// A bottom-level structure over triangles in one space.
 pub struct Blas {
     bvh: Option<CwBvh>,
@@ -47,6 +59,20 @@ pub struct Blas {
 impl Blas {
     /// Builds over `(ref, vertices)`; `needs_filter` marks alpha-tested content.
     pub fn build(items: &[(TriRef, [Vec3; 3])], needs_filter: bool) -> Blas {
+        let kept: Vec<(TriRef, [Vec3; 3])>;
+        let items = if items
+            .iter()
+            .all(|(_, v)| v.iter().all(|p| representable(*p)))
+        {
+            items
+        } else {
+            kept = items
+                .iter()
+                .filter(|(_, v)| v.iter().all(|p| representable(*p)))
+                .copied()
+                .collect();
+            &kept
+        };
         let mut bounds = Bounds3::EMPTY;
         for (_, v) in items {
             v.iter().for_each(|p| bounds.grow(*p));
@@ -262,7 +288,7 @@ impl Accel {
         let boxes: Vec<Bounds3> = boxes
             .into_iter()
             .map(|b| {
-                if b.is_empty() {
+                if b.is_empty() || !representable(b.min) || !representable(b.max) {
                     Bounds3 {
                         min: Vec3::ZERO,
                         max: Vec3::ZERO,

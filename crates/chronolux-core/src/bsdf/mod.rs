@@ -121,6 +121,9 @@ pub struct Lobes {
     pub alpha: f32,
     /// Index of refraction of the dielectric (inside / outside).
     pub ior: f32,
+    /// Transmittance of the medium segment that ended here (a volume's Beer–Lambert
+    /// factor), multiplying every value and sample weight; `None`: 1.
+    pub attenuation: Option<Rgb>,
 }
 
 impl Lobes {
@@ -159,6 +162,7 @@ impl Lobes {
             transmission_specular: (s * spec_color).min(Rgb::ONE),
             alpha: r * r,
             ior,
+            attenuation: None,
         }
     }
 
@@ -428,9 +432,12 @@ impl Bsdf {
         }
         let l = self.local(lo);
         let li_l = if l.flip { mirror(li) } else { li };
-        let f = self
+        let mut f = self
             .lobes
             .f_local(l.wo, li_l, l.eta, mode == TransportMode::Radiance);
+        if let Some(t) = self.lobes.attenuation {
+            f *= t;
+        }
         match mode {
             TransportMode::Radiance => f,
             TransportMode::Importance => f * self.adjoint(wo, wi, lo, li),
@@ -525,6 +532,9 @@ impl Bsdf {
         let eta = if is_transmission { l.eta } else { 1.0 };
         if delta {
             let mut weight = delta_value / p[lobe];
+            if let Some(t) = lobes.attenuation {
+                weight *= t;
+            }
             if mode == TransportMode::Importance {
                 weight *= self.adjoint(wo, wi, lo, li);
             }
@@ -542,6 +552,9 @@ impl Bsdf {
             return None;
         }
         let mut f = lobes.f_local(l.wo, li_l, l.eta, radiance);
+        if let Some(t) = lobes.attenuation {
+            f *= t;
+        }
         if mode == TransportMode::Importance {
             f *= self.adjoint(wo, wi, lo, li);
         }

@@ -134,7 +134,7 @@ impl Light {
                     pdf_dir,
                 })
             }
-            Light::Environment { radiance } => {
+            Light::Environment { env } => {
                 // Direction towards the environment w, the ray travels along −w from a disk
                 // perpendicular to w outside the scene's bounding sphere.
                 let w = warps::sample_uniform_sphere(u_dir);
@@ -145,7 +145,7 @@ impl Light {
                 Some(LeSample {
                     ray: Ray::new(o, -w),
                     n: Vec3::ZERO,
-                    le: *radiance,
+                    le: env.radiance(w),
                     pdf_pos: 1.0 / (std::f32::consts::PI * r * r),
                     pdf_dir: warps::UNIFORM_SPHERE_PDF,
                 })
@@ -242,7 +242,14 @@ mod tests {
                 instance: 0,
             },
             Light::Environment {
-                radiance: Rgb::splat(0.5),
+                env: crate::light::Environment::uniform(Rgb::splat(0.5)),
+            },
+            Light::Environment {
+                env: crate::light::Environment {
+                    zenith: Rgb::splat(1.0),
+                    nadir: Rgb::splat(0.2),
+                    background: Rgb::ZERO,
+                },
             },
         ];
         let mut r = Pcg32::new(5, 6);

@@ -1,5 +1,6 @@
 //! Lights of a frame: punctual lights (KHR_lights_punctual), emissive triangles as area
-//! lights, a uniform environment; and power-proportional light selection.
+//! lights, an environment (uniform or a sky-to-ground gradient, see [`Environment`]); and
+//! power-proportional light selection.
 //!
 //! Units: see the crate doc. Spot falloff follows the KHR_lights_punctual reference: a
 //! smooth step in cos θ between the outer and inner cone, squared.
@@ -49,8 +50,62 @@ pub enum Light {
         instance: u32,
     },
     Environment {
-        radiance: Rgb,
+        env: Environment,
     },
+}
+
+/// Radiance arriving from infinity: a gradient linear in the vertical (y, glTF's up)
+/// component of the direction, from `nadir` (looking straight down) to `zenith` (straight
+/// up); `zenith == nadir` is a uniform environment. `background` is what a camera ray that
+/// leaves the scene without hitting anything shows (a studio backdrop: reflections,
+/// refractions and lighting see the gradient); equal to the gradient's mean for a uniform
+/// environment.
+///
+/// Linear in w.y, the gradient's mean over the sphere is exactly (zenith + nadir)/2, so the
+/// power and the emitted flux of [`Light::Environment`] keep their uniform-sphere form with
+/// that mean; uniform sphere sampling stays unbiased (the ratio of the brightest to the
+/// mean direction is at most 2).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Environment {
+    pub zenith: Rgb,
+    pub nadir: Rgb,
+    pub background: Rgb,
+}
+
+impl Environment {
+    /// The same radiance in every direction, also as background.
+    pub fn uniform(radiance: Rgb) -> Self {
+        Environment {
+            zenith: radiance,
+            nadir: radiance,
+            background: radiance,
+        }
+    }
+
+    /// Whether every direction, and the background, have the same radiance.
+    pub fn is_uniform(&self) -> bool {
+        self.zenith == self.nadir && self.background == self.zenith
+    }
+
+    /// Radiance arriving from direction `w` (towards the environment; need not be unit).
+    pub fn radiance(&self, w: Vec3) -> Rgb {
+        if self.zenith == self.nadir {
+            return self.zenith;
+        }
+        let l = w.length();
+        let up = if l > 0.0 {
+            (w.y / l).clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
+        let t = 0.5 * (1.0 + up);
+        self.nadir * (1.0 - t) + self.zenith * t
+    }
+
+    /// Mean radiance over the sphere of directions.
+    pub fn mean(&self) -> Rgb {
+        (self.zenith + self.nadir) * 0.5
+    }
 }
 
 /// A sampled light direction from a reference point.
@@ -75,8 +130,9 @@ pub struct LightSample {
 impl Light {
     /// Total emitted power (W-equivalent, luminance of the colour), used for light
     /// selection. Infinite lights report the flux entering the scene's bounding sphere of
-    /// radius `scene_radius`: E·πR² for a directional light, 4πR²·πL for a uniform
-    /// environment (every point of the sphere receives πL through its inward hemisphere).
+    /// radius `scene_radius`: E·πR² for a directional light, 4πR²·πL̄ for an environment of
+    /// mean radiance L̄ (for a uniform one every point of the sphere receives πL through its
+    /// inward hemisphere; the gradient's w.y term integrates to zero over the sphere).
     pub fn power(&self, scene_radius: f32) -> f32 {
         match self {
             Light::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
@@ -95,8 +151,8 @@ impl Light {
                 two_sided,
                 ..
             } => PI * area * luminance(*radiance) * if *two_sided { 2.0 } else { 1.0 },
-            Light::Environment { radiance } => {
-                4.0 * PI * PI * scene_radius * scene_radius * luminance(*radiance)
+            Light::Environment { env } => {
+                4.0 * PI * PI * scene_radius * scene_radius * luminance(env.mean())
             }
         }
     }
@@ -223,13 +279,13 @@ impl Light {
                     bary: Vec2::new(b1, b2),
                 })
             }
-            Light::Environment { radiance } => {
+            Light::Environment { env } => {
                 let wi = warps::sample_uniform_sphere(u);
                 Some(LightSample {
                     wi,
                     p: p + wi * (4.0 * scene_radius.max(1e-3)),
                     n: Vec3::ZERO,
-                    li: *radiance,
+                    li: env.radiance(wi),
                     pdf: warps::UNIFORM_SPHERE_PDF,
                     is_delta: false,
                     bary: Vec2::ZERO,

@@ -281,6 +281,14 @@ macro_rules! bit_eq_array {
 }
 bit_eq_array!(Vec2, Vec3, Vec4);
 
+impl BitEq for crate::light::Environment {
+    fn bit_eq(&self, o: &Self) -> bool {
+        self.zenith.bit_eq(&o.zenith)
+            && self.nadir.bit_eq(&o.nadir)
+            && self.background.bit_eq(&o.background)
+    }
+}
+
 impl BitEq for Affine3A {
     fn bit_eq(&self, o: &Self) -> bool {
         self.to_cols_array().map(f32::to_bits) == o.to_cols_array().map(f32::to_bits)
@@ -402,7 +410,7 @@ fn same_light(a: &Light, b: &Light) -> bool {
                 && tri == tri2
                 && instance == in2
         }
-        (Environment { radiance }, Environment { radiance: r2 }) => radiance.bit_eq(r2),
+        (Environment { env }, Environment { env: e2 }) => env.bit_eq(e2),
         _ => false,
     }
 }

@@ -42,7 +42,21 @@ typed_id!(
 
 /// The warning a loader gives when it adds the default environment to a scene without
 /// lights (a stage that brings its own lights removes it again).
-pub const DEFAULT_ENVIRONMENT_WARNING: &str = "scene has no light (no punctual light, no emissive material): added a default uniform white environment light";
+pub const DEFAULT_ENVIRONMENT_WARNING: &str = "scene has no light (no punctual light, no emissive material): added a default environment light (white sky above, dim ground below, dark grey background)";
+
+/// The default environment of a scene without lights (see [`DEFAULT_ENVIRONMENT_WARNING`]):
+/// a neutral sky-to-ground gradient, radiance 1 straight up and 0.2 straight down, so
+/// untextured white models show their shape: L(w) = 0.6 + 0.4·w.y, so an unoccluded face
+/// turned up receives E/π = 0.6 + 0.4·2/3 ≈ 0.87, a vertical face 0.6, a face turned down
+/// 0.33; seen against a dark grey backdrop (0.05, about 25% grey after the sRGB curve) that
+/// no lit white surface matches.
+pub fn default_environment() -> crate::light::Environment {
+    crate::light::Environment {
+        zenith: Rgb::splat(1.0),
+        nadir: Rgb::splat(0.2),
+        background: Rgb::splat(0.05),
+    }
+}
 
 /// The whole scene.
 #[derive(Clone, Debug, Default)]
@@ -59,8 +73,8 @@ pub struct SceneDesc {
     pub cameras: Vec<CameraDesc>,
     pub skins: Vec<Skin>,
     pub animations: Vec<Animation>,
-    /// Uniform environment radiance seen by rays that leave the scene (`None`: black).
-    pub environment: Option<Rgb>,
+    /// Environment radiance seen by rays that leave the scene (`None`: black).
+    pub environment: Option<crate::light::Environment>,
     /// Messages for the user produced while loading (ignored optional extensions, skipped
     /// degenerate triangles, ...).
     pub warnings: Vec<String>,
@@ -252,6 +266,43 @@ pub struct Material {
     pub ior: f32,
     pub alpha_mode: AlphaMode,
     pub double_sided: bool,
+    /// KHR_materials_volume: absorption inside the (closed) mesh; `None`: thin-walled or no
+    /// absorption.
+    pub volume: Option<Volume>,
+}
+
+/// A homogeneous absorbing medium inside a transmissive closed mesh (`KHR_materials_volume`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Volume {
+    /// Absorption coefficient per world unit, per channel: σ = −ln(attenuationColor) /
+    /// attenuationDistance, so white light has the attenuation colour after the attenuation
+    /// distance (Beer–Lambert; a zero channel absorbs it completely).
+    pub sigma_a: Rgb,
+}
+
+impl Volume {
+    /// From the extension's `attenuationColor` and `attenuationDistance` (world units,
+    /// +∞ for none).
+    pub fn from_attenuation(color: Rgb, distance: f32) -> Self {
+        let s = |c: f32| {
+            if distance.is_infinite() || c >= 1.0 {
+                0.0
+            } else if c <= 0.0 {
+                f32::INFINITY
+            } else {
+                -c.ln() / distance
+            }
+        };
+        Volume {
+            sigma_a: Rgb::new(s(color.x), s(color.y), s(color.z)),
+        }
+    }
+
+    /// Transmittance exp(−σ·d) along a world-space length `d`.
+    pub fn transmittance(&self, d: f32) -> Rgb {
+        let t = |s: f32| if s == 0.0 { 1.0 } else { (-s * d).exp() };
+        Rgb::new(t(self.sigma_a.x), t(self.sigma_a.y), t(self.sigma_a.z))
+    }
 }
 
 impl Default for Material {
@@ -278,6 +329,7 @@ impl Default for Material {
             ior: 1.5,
             alpha_mode: AlphaMode::Opaque,
             double_sided: false,
+            volume: None,
         }
     }
 }

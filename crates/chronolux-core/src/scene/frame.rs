@@ -80,7 +80,7 @@ pub struct FrameScene {
     /// Light index of triangle 0 of each geometry (`u32::MAX`: not emissive); triangle `k`
     /// of an emissive geometry is light `base + k`.
     pub emissive_base: Vec<u32>,
-    pub environment: Option<Rgb>,
+    pub environment: Option<crate::light::Environment>,
     /// Index of the environment light in `lights`.
     pub environment_light: Option<usize>,
     pub camera: Camera,
@@ -136,7 +136,13 @@ impl FrameScene {
 
     /// Surface data at a hit.
     pub fn interaction(&self, hit: &Hit, ray: &Ray) -> SurfaceInteraction {
-        self.surface_at(hit.tri, hit.instance, hit.b1, hit.b2, Some(ray.at(hit.t)))
+        let mut si = self.surface_at(hit.tri, hit.instance, hit.b1, hit.b2, Some(ray.at(hit.t)));
+        // Reached from behind (against the winding's normal): the segment ran inside the
+        // mesh; its world-space length is what a volume absorbs along.
+        if ray.d.dot(si.ng) > 0.0 {
+            si.shading.interior_distance = hit.t * ray.d.length();
+        }
+        si
     }
 
     /// Surface data at barycentrics (b1, b2) of a triangle of an instance.
@@ -197,6 +203,7 @@ impl FrameScene {
                 dpdu,
                 tangent,
                 uv,
+                interior_distance: 0.0,
             },
             material: g.material,
             tri,
@@ -658,10 +665,10 @@ impl FrameBuilder {
         let mut environment_light = None;
         if let Some(env) = self.desc.environment {
             environment_light = Some(lights.len());
-            lights.push(Light::Environment { radiance: env });
+            lights.push(Light::Environment { env });
         }
         let light_sampler = LightSampler::new(&lights, radius);
-        let camera = self.camera_at(&pose, bounds);
+        let camera = self.camera_at(&pose, bounds, &lights, radius);
         stats.instances = accel.instances().len() as u32;
         stats.seconds = start.elapsed().as_secs_f64();
         self.last_build = stats;
@@ -684,7 +691,7 @@ impl FrameBuilder {
         }
     }
 
-    fn camera_at(&self, pose: &Pose, bounds: Bounds3) -> Camera {
+    fn camera_at(&self, pose: &Pose, bounds: Bounds3, lights: &[Light], radius: f32) -> Camera {
         let name = match &self.camera {
             CameraChoice::First => None,
             CameraChoice::Named(n) => Some(n.as_str()),
@@ -696,7 +703,12 @@ impl FrameBuilder {
                 self.width,
                 self.height,
             ),
-            None => auto_camera(bounds, self.width, self.height),
+            None => auto_camera(
+                bounds,
+                light_side(lights, bounds, radius),
+                self.width,
+                self.height,
+            ),
         }
     }
 }
@@ -722,15 +734,63 @@ fn find_camera<'a>(desc: &'a SceneDesc, name: Option<&str>) -> Option<(NodeId, &
     }
 }
 
-/// A perspective camera (yfov 40°) on the +Z side of the scene, looking at its centre
-/// from a distance at which the bounding sphere fills the view.
-pub fn auto_camera(bounds: Bounds3, width: u32, height: u32) -> Camera {
+/// Where the light comes from, seen from the centre of `bounds`: the power-weighted mean
+/// of the unit directions towards each light (towards a point or spot light, against a
+/// directional light's travel, towards an emissive triangle's centroid, and up for an
+/// environment brighter above than below, weighted by its zenith–nadir contrast). Its length
+/// (≤ 1) says how one-sided the lighting is: 0 for a uniform environment or lights all around.
+pub fn light_side(lights: &[Light], bounds: Bounds3, radius: f32) -> Vec3 {
+    let (c, _) = bounds.bounding_sphere();
+    let mut sum = Vec3::ZERO;
+    let mut total = 0.0f32;
+    for l in lights {
+        let power = l.power(radius);
+        if !(power.is_finite() && power > 0.0) {
+            continue;
+        }
+        let dir = match l {
+            Light::Point { p, .. } | Light::Spot { p, .. } => (*p - c).normalize_or_zero(),
+            Light::Directional { dir, .. } => -dir.normalize_or_zero(),
+            Light::Triangle { p0, e1, e2, .. } => {
+                (*p0 + (*e1 + *e2) * (1.0 / 3.0) - c).normalize_or_zero()
+            }
+            Light::Environment { env } => {
+                let up = crate::color::luminance(env.zenith - env.nadir);
+                let both = crate::color::luminance(env.zenith + env.nadir);
+                Vec3::Y * if both > 0.0 { up / both } else { 0.0 }
+            }
+        };
+        sum += dir * power;
+        total += power;
+    }
+    if total > 0.0 && sum.is_finite() {
+        sum / total
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// A perspective camera (yfov 40°) looking at the scene's centre from a distance at which
+/// the bounding sphere fills the view. Without a light side (`light_side` zero) it stands on
+/// the +Z side, slightly above; otherwise it turns towards the light side by its strength
+/// ([`light_side`]), so a model lit from above or from one side shows its lit faces, with
+/// the elevation kept within ±60° so "up" stays defined.
+pub fn auto_camera(bounds: Bounds3, light_side: Vec3, width: u32, height: u32) -> Camera {
     let (c, r) = bounds.bounding_sphere();
     let r = if r > 0.0 { r } else { 1.0 };
+    let mut view = Vec3::new(0.0, 0.25, 1.0).normalize() + light_side.clamp_length_max(1.0);
+    let horizontal = Vec3::new(view.x, 0.0, view.z);
+    let h = horizontal.length();
+    let max_elev = 60f32.to_radians();
+    if h < 1e-3 || view.y.abs() > h * max_elev.tan() {
+        let hdir = if h < 1e-3 { Vec3::Z } else { horizontal / h };
+        view = hdir * max_elev.cos() + Vec3::Y * max_elev.sin() * view.y.signum();
+    }
+    let view = view.normalize();
     let yfov = 40f32.to_radians();
     let half = (0.5 * yfov).min(0.5 * yfov * width as f32 / height as f32);
     let dist = r / half.sin();
-    let eye = c + Vec3::new(0.0, 0.25 * r, dist);
+    let eye = c + view * dist;
     let f = (c - eye).normalize();
     let right = f.cross(Vec3::Y).normalize();
     let up = right.cross(f);

@@ -113,7 +113,7 @@ impl TerrainSpheres {
                 mesh("big sphere", icosphere(self.big_level)),
             ],
             materials: vec![Material::diffuse("white", Rgb::splat(0.7))],
-            environment: Some(Rgb::splat(1.0)),
+            environment: Some(crate::light::Environment::uniform(Rgb::splat(1.0))),
             ..Default::default()
         }
     }

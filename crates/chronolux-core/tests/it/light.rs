@@ -7,7 +7,7 @@ use crate::chi2::{CapGrid, pooled_p_value};
 use chronolux_core::accel::TriRef;
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::light::spherical::use_solid_angle_sampling;
-use chronolux_core::light::{Light, spot_falloff};
+use chronolux_core::light::{Environment, Light, spot_falloff};
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::sampling::rng::Pcg32;
 use chronolux_core::testing::stats::sidak;
@@ -260,7 +260,14 @@ fn light_configs() -> Vec<(String, Light, Vec3)> {
         (
             "environment".into(),
             Light::Environment {
-                radiance: Rgb::new(0.3, 0.5, 0.7),
+                env: Environment::uniform(Rgb::new(0.3, 0.5, 0.7)),
+            },
+            Vec3::new(1.0, 2.0, 3.0),
+        ),
+        (
+            "environment gradient (the default light)".into(),
+            Light::Environment {
+                env: chronolux_core::scene::desc::default_environment(),
             },
             Vec3::new(1.0, 2.0, 3.0),
         ),
@@ -456,7 +463,7 @@ fn infinite_light_power_is_flux_into_the_scene_sphere() {
         "directional {pd}"
     );
     let e = Light::Environment {
-        radiance: Rgb::splat(0.5),
+        env: Environment::uniform(Rgb::splat(0.5)),
     };
     // Inward cosine-weighted radiance at one surface point (all are alike), through
     // sample_li's li: ∫ L max(0, −n·w) dω with n the outward normal.

@@ -226,11 +226,14 @@ fn unlit_scene_gets_default_environment_with_warning() {
     let Some(d) = load_ok("BoxAnimated.glb") else {
         return;
     };
-    assert_eq!(d.environment, Some(Vec3::splat(1.0)));
+    // Was `Some(Vec3::splat(1.0))` (uniform white, also the background) before issue 15.
+    let env = d.environment.expect("default light");
+    assert_eq!(env, chronolux_core::scene::desc::default_environment());
+    assert!(env.zenith.x > env.nadir.x && env.background.x < env.nadir.x);
     assert!(
         d.warnings
             .iter()
-            .any(|w| w.contains("default uniform white environment"))
+            .any(|w| w.contains("no light") && w.contains("default environment"))
     );
     // No material → material None.
     let Some(t) = load_ok("AnimatedTriangle.gltf") else {
@@ -962,5 +965,194 @@ fn shared_scenes_fit_the_cornell_stage() {
                 0.5,
             );
         }
+    }
+}
+
+/// `tiny` plus a translation clip: key times at accessor 2 (t = 0, 1), values at accessor 3
+/// ((0,0,0), (1,2,3)); `channels` is written as given.
+fn tiny_animated(channels: Value) -> Value {
+    let mut bytes: Vec<u8> = TRI.iter().flatten().flat_map(|f| f.to_le_bytes()).collect(); // 36
+    bytes.extend([0u16, 1, 2].iter().flat_map(|i| i.to_le_bytes())); // 6
+    bytes.extend([0u8; 2]); // pad to 44
+    bytes.extend([0.0f32, 1.0].iter().flat_map(|f| f.to_le_bytes())); // 8 → 52
+    bytes.extend(
+        [0.0f32, 0.0, 0.0, 1.0, 2.0, 3.0]
+            .iter()
+            .flat_map(|f| f.to_le_bytes()),
+    ); // 24 → 76
+    let mut v = tiny(&TRI, &[0, 1, 2]);
+    v["buffers"] = json!([{"byteLength": bytes.len(), "uri": b64(&bytes)}]);
+    v["bufferViews"] = json!([
+        {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+        {"buffer": 0, "byteOffset": 36, "byteLength": 6},
+        {"buffer": 0, "byteOffset": 44, "byteLength": 8},
+        {"buffer": 0, "byteOffset": 52, "byteLength": 24}
+    ]);
+    v["accessors"] = json!([
+        {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+        {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+        {"bufferView": 2, "componentType": 5126, "count": 2, "type": "SCALAR"},
+        {"bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC3"}
+    ]);
+    v["animations"] = json!([{"name": "move", "channels": channels,
+        "samplers": [{"input": 2, "output": 3, "interpolation": "LINEAR"}]}]);
+    v
+}
+
+#[test]
+fn animation_target_node_out_of_range_is_an_error_not_a_panic() {
+    // Used to panic in gltf-1.4.1 (animation/mod.rs:211): its validation skips channel
+    // targets and `Target::node` unwraps.
+    let v = tiny_animated(json!([{"sampler": 0, "target": {"node": 3, "path": "translation"}}]));
+    let e = load_json(&v).unwrap_err();
+    let msg = single_line(&e);
+    assert!(
+        matches!(e, LoadError::Invalid { .. })
+            && msg.contains("animations[0].channels[0].target.node")
+            && msg.contains("out of bounds"),
+        "{msg}"
+    );
+    // An unknown property name is refused the same way (`Target::property` unwraps too).
+    let v = tiny_animated(json!([{"sampler": 0, "target": {"node": 0, "path": "colour"}}]));
+    let msg = single_line(&load_json(&v).unwrap_err());
+    assert!(
+        msg.contains("animations[0].channels[0].target.path"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn animation_channel_without_node_is_ignored_with_a_warning() {
+    // glTF 2.0, animation.channel.target.node: "When undefined, the animated object MAY be
+    // defined by an extension" — valid, and without such an extension there is nothing to
+    // animate. The second channel (original index 1) is kept and animates node 0.
+    let v = tiny_animated(json!([
+        {"sampler": 0, "target": {"path": "translation"}},
+        {"sampler": 0, "target": {"node": 0, "path": "translation"}}
+    ]));
+    let d = load_json(&v).unwrap();
+    let warned: Vec<_> = d
+        .warnings
+        .iter()
+        .filter(|w| w.contains("animations[0].channels[0]") && w.contains("no target.node"))
+        .collect();
+    assert_eq!(warned.len(), 1, "{:?}", d.warnings);
+    assert_eq!(d.animations[0].channels.len(), 1);
+    let pose = pose_at(&d, d.find_animation("move"), 0.5);
+    // Linear key interpolation halfway between (0,0,0) and (1,2,3); f32 rounding only.
+    assert!(
+        (pose.local[0].translation - Vec3::new(0.5, 1.0, 1.5)).length() < 1e-6,
+        "{:?}",
+        pose.local[0].translation
+    );
+    // Every channel without a node: an animation with no channels, still no panic.
+    let v = tiny_animated(json!([{"sampler": 0, "target": {"path": "rotation"}}]));
+    let d = load_json(&v).unwrap();
+    assert!(d.animations[0].channels.is_empty());
+}
+
+#[test]
+fn materials_volume_is_read_as_an_absorption_coefficient() {
+    let mut v = tiny(&TRI, &[0, 1, 2]);
+    v["extensionsUsed"] = json!(["KHR_materials_transmission", "KHR_materials_volume"]);
+    v["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let glass = |volume: Value| {
+        json!({"name": "glass", "extensions": {
+            "KHR_materials_transmission": {"transmissionFactor": 1.0},
+            "KHR_materials_volume": volume}})
+    };
+    v["materials"] = json!([glass(json!({
+        "thicknessFactor": 0.2, "attenuationDistance": 0.5,
+        "attenuationColor": [0.25, 1.0, 0.5]}))]);
+    let d = load_json(&v).unwrap();
+    assert!(
+        !d.warnings
+            .iter()
+            .any(|w| w.contains("KHR_materials_volume")),
+        "{:?}",
+        d.warnings
+    );
+    let vol = d.materials[0].volume.expect("volume read");
+    // σ = −ln(c)/distance: white light has colour c after 0.5 world units.
+    let want = Vec3::new(-(0.25f32.ln()) / 0.5, 0.0, -(0.5f32.ln()) / 0.5);
+    assert!((vol.sigma_a - want).abs().max_element() < 1e-6, "{vol:?}");
+    let t = vol.transmittance(0.5);
+    assert!(
+        (t - Vec3::new(0.25, 1.0, 0.5)).abs().max_element() < 1e-6,
+        "{t}"
+    );
+    // thicknessFactor 0 (the default) is thin-walled by the spec: no volume, one warning.
+    v["materials"] = json!([glass(json!({
+        "attenuationColor": [0.5, 0.5, 0.5], "attenuationDistance": 1.0}))]);
+    let d = load_json(&v).unwrap();
+    assert!(d.materials[0].volume.is_none());
+    assert!(
+        d.warnings.iter().any(|w| w.contains("thin-walled")),
+        "{:?}",
+        d.warnings
+    );
+    // No attenuation given (white, infinite distance): nothing to absorb, no warning.
+    v["materials"] = json!([glass(json!({"thicknessFactor": 1.0}))]);
+    let d = load_json(&v).unwrap();
+    assert!(d.materials[0].volume.is_none());
+    // A required volume extension is now supported.
+    v["extensionsRequired"] = json!(["KHR_materials_volume"]);
+    assert!(load_json(&v).is_ok());
+}
+
+#[test]
+fn external_uri_to_a_device_or_directory_is_an_error_not_a_hang() {
+    // Reading `/dev/zero` as a buffer never ends (and exhausts memory).
+    let dir = temp_dir("devzero");
+    for uri in ["/dev/zero", "."] {
+        let mut v = tiny(&TRI, &[0, 1, 2]);
+        v["buffers"][0]["uri"] = json!(uri);
+        let e = load_slice(&serde_json::to_vec(&v).unwrap(), Some(&dir), "dev.gltf").unwrap_err();
+        let msg = single_line(&e);
+        assert!(
+            msg.contains("not a regular file") && msg.contains("buffers[0]"),
+            "{msg}"
+        );
+    }
+}
+
+#[test]
+fn position_accessor_out_of_range_is_an_error_not_a_panic() {
+    // Found by the mutation fuzzer (tests/it/fuzz.rs): gltf-json's validation itself indexes
+    // `accessors` with the POSITION index (gltf-json-1.4.1/src/mesh.rs:151).
+    let mut v = tiny(&TRI, &[0, 1, 2]);
+    v["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(9);
+    let msg = single_line(&load_json(&v).unwrap_err());
+    assert!(
+        msg.contains("meshes[0].primitives[0].attributes.POSITION")
+            && msg.contains("out of bounds"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn huge_vertex_coordinates_are_an_error() {
+    // Found by the mutation fuzzer: a vertex at −1.7e38 broke the BVH build downstream.
+    let msg = single_line(
+        &load_json(&tiny(
+            &[[0.0, 0.0, 0.0], [-1.7e38, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            &[0, 1, 2],
+        ))
+        .unwrap_err(),
+    );
+    assert!(msg.contains("POSITION") && msg.contains("beyond"), "{msg}");
+}
+
+#[test]
+fn image_without_source_or_mime_type_is_an_error_not_a_panic() {
+    // Found by the mutation fuzzer: gltf-1.4.1's `Image::source` unwraps both.
+    for image in [json!({}), json!({"bufferView": 0})] {
+        let mut v = tiny(&TRI, &[0, 1, 2]);
+        v["images"] = json!([image]);
+        v["textures"] = json!([{"source": 0}]);
+        v["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+        v["meshes"][0]["primitives"][0]["material"] = json!(0);
+        let msg = single_line(&load_json(&v).unwrap_err());
+        assert!(msg.contains("images[0]"), "{msg}");
     }
 }

@@ -278,3 +278,75 @@ fn reads_f16_rgba_exr() {
     assert_eq!(img.get(0, 0), Rgb::new(0.0, 0.25, -1.5));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+// ---------------------------------------------------------------------------------------
+// View transforms and automatic exposure
+
+use chronolux_io::image::{AUTO_EXPOSURE_KEY, View, auto_exposure, tonemap_view_srgb8};
+
+#[test]
+fn agx_is_monotone_neutral_and_rolls_off_softly() {
+    let agx = |v: f32| View::Agx.apply(Rgb::splat(v));
+    // Black stays black (the curve's foot −0.00232 clamps to 0).
+    assert!(agx(0.0).max_element() < 1e-3, "{}", agx(0.0));
+    let mut prev = -1.0f32;
+    let mut v = 1e-3f32; // above the log encoding's floor, 2^−12.47 ≈ 1.8e-4
+    while v < 100.0 {
+        let d = agx(v);
+        // Neutral: grey stays grey. The published matrices' rows sum to 1 within 2e-4, so
+        // channels differ by at most a few 1e-4.
+        assert!(d.max_element() - d.min_element() < 1e-3, "{v}: {d}");
+        // Monotone; strictly until the 4.03-stop ceiling (16) clamps the log encoding.
+        assert!(
+            d.x >= prev && (d.x > prev || v > 16.0),
+            "{v}: {} after {prev}",
+            d.x
+        );
+        prev = d.x;
+        v *= 1.1;
+    }
+    // Middle grey well inside, diffuse white unclipped, 4 stops over it (≈ 16) reaches 1:
+    // the roll-off that keeps a sun-lit scene from clipping.
+    assert!((0.35..0.55).contains(&agx(0.18).x), "{}", agx(0.18));
+    assert!((0.6..0.9).contains(&agx(1.0).x), "{}", agx(1.0));
+    assert!(agx(16.0).x > 0.99 && agx(1000.0).x <= 1.0);
+    // Standard: the old clamp and sRGB curve, byte for byte.
+    let img = Image {
+        width: 3,
+        height: 1,
+        pixels: vec![Rgb::splat(0.1), Rgb::new(0.5, 2.0, f32::NAN), Rgb::ZERO],
+    };
+    assert_eq!(
+        tonemap_view_srgb8(&img, 0.5, View::Standard),
+        tonemap_srgb8(&img, 0.5)
+    );
+    // A NaN channel counts as 0 (before AgX's matrices mix the channels): an all-NaN
+    // pixel is black.
+    let nan = Image {
+        width: 1,
+        height: 1,
+        pixels: vec![Rgb::splat(f32::NAN)],
+    };
+    assert_eq!(tonemap_view_srgb8(&nan, 0.0, View::Agx), vec![[0, 0, 0]]);
+}
+
+#[test]
+fn auto_exposure_puts_the_90th_percentile_at_the_key() {
+    // A sun-lit surface of radiance 1600 on 80% of the pixels, a dark rest: the 90th
+    // percentile is the surface, brought to the key.
+    let mut px = vec![Rgb::splat(1600.0); 80];
+    px.extend(vec![Rgb::splat(0.01); 20]);
+    let ev = auto_exposure(&px);
+    assert!(
+        (ev - (AUTO_EXPOSURE_KEY / 1600.0).log2()).abs() < 1e-5,
+        "{ev}"
+    );
+    // A small bright object on black: the 90th percentile is black, the 99th is used.
+    let mut px = vec![Rgb::ZERO; 95];
+    px.extend(vec![Rgb::splat(4.0); 5]);
+    assert!((auto_exposure(&px) - (AUTO_EXPOSURE_KEY / 4.0).log2()).abs() < 1e-5);
+    // All black, empty or non-finite: no change.
+    assert_eq!(auto_exposure(&[Rgb::ZERO; 10]), 0.0);
+    assert_eq!(auto_exposure(&[]), 0.0);
+    assert_eq!(auto_exposure(&[Rgb::splat(f32::NAN)]), 0.0);
+}

@@ -1,5 +1,6 @@
 //! The one integration-test binary of chronolux-io.
 
+mod fuzz;
 mod gltf;
 mod image;
 mod output;

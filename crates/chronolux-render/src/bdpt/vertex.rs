@@ -274,7 +274,16 @@ impl Vertex {
     pub fn le(&self, scene: &FrameScene, v: &Vertex) -> Rgb {
         let w = (v.p - self.p).normalize_or_zero();
         match self.kind {
-            VertexKind::Light if self.infinite => scene.environment.unwrap_or(Rgb::ZERO),
+            // At infinity: the environment seen along −w; straight from the camera, the
+            // backdrop (only the camera strategy sees it: no light subpath reaches a camera
+            // vertex from infinity).
+            VertexKind::Light if self.infinite => scene.environment.map_or(Rgb::ZERO, |e| {
+                if v.kind == VertexKind::Camera {
+                    e.background
+                } else {
+                    e.radiance(-w)
+                }
+            }),
             VertexKind::Surface => {
                 if self.light_index(scene).is_none() {
                     return Rgb::ZERO;

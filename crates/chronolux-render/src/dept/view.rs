@@ -52,11 +52,17 @@ impl RadianceEstimator for DeptView<'_> {
         let mut l = Rgb::ZERO;
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
-        for _ in 0..=self.max_specular_depth {
+        for bounce in 0..=self.max_specular_depth {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray) else {
                 if let Some(env) = scene.environment {
-                    l += beta * env;
+                    // The camera ray itself shows the backdrop.
+                    l += beta
+                        * if bounce == 0 {
+                            env.background
+                        } else {
+                            env.radiance(ray.d)
+                        };
                 }
                 break;
             };

@@ -137,14 +137,20 @@ impl<'a, S: IndirectSource> EyeView<'a, S> {
         let mut path_len = 0.0f32;
         let mut after_non_delta = false;
         let mut glossy = 0u32;
-        for _ in 0..=s.max_specular_depth + s.max_glossy_depth {
+        for bounce in 0..=s.max_specular_depth + s.max_glossy_depth {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray) else {
                 if render
                     && !after_non_delta
                     && let Some(env) = scene.environment
                 {
-                    l += beta * env;
+                    // The camera ray itself shows the backdrop (as in `dept`'s view).
+                    l += beta
+                        * if bounce == 0 {
+                            env.background
+                        } else {
+                            env.radiance(ray.d)
+                        };
                 }
                 break;
             };

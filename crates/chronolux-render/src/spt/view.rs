@@ -84,11 +84,17 @@ impl RadianceEstimator for SptView<'_> {
         let mut emission_counts = true;
         let mut glossy = 0u32;
         let alpha_glossy = self.glossy_roughness * self.glossy_roughness;
-        for _ in 0..=(self.max_specular_depth + self.max_glossy_depth) {
+        for bounce in 0..=(self.max_specular_depth + self.max_glossy_depth) {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray) else {
                 if emission_counts && let Some(env) = scene.environment {
-                    l += beta * env;
+                    // The camera ray itself shows the backdrop (as in `dept`'s view).
+                    l += beta
+                        * if bounce == 0 {
+                            env.background
+                        } else {
+                            env.radiance(ray.d)
+                        };
                 }
                 break;
             };

@@ -4,6 +4,7 @@
 
 use crate::frame0;
 use chronolux_core::color::Rgb;
+use chronolux_core::light::Environment;
 use chronolux_core::math::{Quat, Vec3};
 use chronolux_core::scene::desc::{
     LightDesc, LightId, LightKind, Material, Mesh, MeshId, Node, NodeId, SceneDesc, Trs,
@@ -213,8 +214,26 @@ fn bdpt_bit_identical_across_thread_counts() {
 /// plus a spot light (delta position, cone) aimed at the floor away from the spheres.
 #[test]
 fn bdpt_agrees_with_path_tracer_with_environment_and_spot() {
+    environment_and_spot(
+        Environment::uniform(Rgb::new(0.6, 0.7, 0.9)),
+        "environment + spot",
+    );
+}
+
+/// The same with the default light of an unlit file: a sky-to-ground gradient (light
+/// sampling, emission from infinity and escaped rays all see the direction-dependent
+/// radiance) and a backdrop that only camera rays see.
+#[test]
+fn bdpt_agrees_with_path_tracer_with_gradient_environment_and_backdrop() {
+    environment_and_spot(
+        chronolux_core::scene::desc::default_environment(),
+        "gradient environment + backdrop + spot",
+    );
+}
+
+fn environment_and_spot(env: Environment, what: &str) {
     let mut d = stage::demo();
-    d.environment = Some(Rgb::new(0.6, 0.7, 0.9));
+    d.environment = Some(env);
     d.lights.push(LightDesc {
         name: "spot".into(),
         color: Rgb::ONE,
@@ -241,5 +260,5 @@ fn bdpt_agrees_with_path_tracer_with_environment_and_spot() {
     let reference = pt(1024, None).render(&scene, 0, &|_| {});
     let img = bdpt(256, None, MisHeuristic::Power).render(&scene, 0, &|_| {});
     assert_eq!(img.invalid_samples, 0);
-    assert_agree(&img, &reference, "environment + spot");
+    assert_agree(&img, &reference, what);
 }

@@ -15,6 +15,7 @@ mod photon;
 mod pmic;
 mod spt;
 mod stbpt;
+mod volume;
 mod window_film;
 
 use chronolux_core::scene::desc::SceneDesc;

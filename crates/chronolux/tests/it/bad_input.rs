@@ -227,3 +227,19 @@ fn usage_errors_are_one_line() {
     fails(&render_demo(&["--threads", "0"]), &["--threads"]);
     fails(&render_demo(&["--max-depth", "0"]), &["--max-depth"]);
 }
+
+/// An animation channel whose `target.node` is out of range used to panic inside the gltf
+/// crate (`gltf-1.4.1/src/animation/mod.rs:211`) from both `info` and `render`.
+#[test]
+fn animation_target_node_out_of_range() {
+    let dir = temp_dir("animnode");
+    let (mut v, buf) = tiny(&TRI, &[0, 1, 2]);
+    v["animations"] = json!([{
+        "channels": [{"sampler": 0, "target": {"node": 7, "path": "translation"}}],
+        "samplers": [{"input": 1, "output": 0}]
+    }]);
+    let p = write_gltf(&dir, &v, Some(&buf));
+    let want = ["animations[0].channels[0].target.node", "out of bounds"];
+    fails(&render_scene(&p, &[]), &want);
+    fails(&run(["info", p.to_str().unwrap()]), &want);
+}

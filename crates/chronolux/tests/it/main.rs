@@ -7,6 +7,7 @@ mod common;
 mod config;
 mod farm;
 mod info;
+mod kill_resume;
 mod passes;
 mod render;
 mod shutter;

@@ -339,3 +339,151 @@ fn render_help_mentions_every_flag() {
         "{help}"
     );
 }
+
+/// A 2×2 quad facing +Z (no material: white) lit head-on by a directional light of
+/// 5000 lux, as engines and Blender export a sun; no camera.
+fn sun_lit_quad(dir: &Path) -> std::path::PathBuf {
+    let quad = [
+        [-1.0, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ];
+    let (mut v, buf) = tiny(&quad, &[0, 1, 2, 0, 2, 3]);
+    v["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual"]);
+    v["extensions"] = serde_json::json!({"KHR_lights_punctual": {"lights": [
+        {"type": "directional", "intensity": 5000.0}]}});
+    v["nodes"] =
+        serde_json::json!([{"mesh": 0}, {"extensions": {"KHR_lights_punctual": {"light": 0}}}]);
+    v["scenes"] = serde_json::json!([{"nodes": [0, 1]}]);
+    write_gltf(dir, &v, Some(&buf))
+}
+
+#[test]
+fn sun_lit_scene_is_exposed_automatically_and_replays_identically() {
+    let dir = temp_dir("sun");
+    let p = sun_lit_quad(&dir);
+    let render = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            p.to_str().unwrap(),
+            "--frames",
+            "0",
+            "--resolution",
+            "32x32",
+            "--spp",
+            "4",
+            "--output",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        ok(&run(&args))
+    };
+    let centre = |out: &Path| {
+        let png = chronolux_io::image::read_png_rgb8(out.join("frame_0000.png")).unwrap();
+        png.pixels[16 * 32 + 16]
+    };
+    // Default: automatic exposure + AgX. The quad's radiance is about 5000/π ≈ 1600; the
+    // exposure brings the 90th percentile (the quad) to the key 0.8 (log2(0.8/1600) ≈ −11),
+    // shown at about 0.75 × 255 ≈ 190 by AgX, not clipped.
+    let auto = dir.join("auto");
+    render(&auto, &[]);
+    let c = centre(&auto);
+    assert!(c.iter().all(|&v| (100..250).contains(&v)), "{c:?}");
+    let m = manifest(&auto);
+    let ev = m["settings"]["auto_exposure"]
+        .as_f64()
+        .expect("auto_exposure recorded");
+    assert!((-12.5..-9.5).contains(&ev), "{ev}");
+    assert!(m["settings"]["exposure"].is_null());
+    assert_eq!(m["settings"]["view"], "agx");
+    // What the issue saw: the old default (exposure 0, clamp) is solid white.
+    let old = dir.join("standard");
+    render(&old, &["--view", "standard", "--exposure", "0"]);
+    assert_eq!(centre(&old), [255, 255, 255]);
+    assert_eq!(manifest(&old)["settings"]["view"], "standard");
+    assert!(manifest(&old)["settings"].get("auto_exposure").is_none());
+    // The EXR is the same linear image whatever the view and exposure.
+    assert_eq!(
+        std::fs::read(auto.join("frame_0000.exr")).unwrap(),
+        std::fs::read(old.join("frame_0000.exr")).unwrap()
+    );
+    // Replaying run.json measures the same exposure: identical PNG.
+    let again = dir.join("again");
+    let cfg = auto.join("run.json");
+    ok(&run([
+        "render",
+        "--config",
+        cfg.to_str().unwrap(),
+        "--output",
+        again.to_str().unwrap(),
+    ]));
+    assert_eq!(
+        std::fs::read(auto.join("frame_0000.png")).unwrap(),
+        std::fs::read(again.join("frame_0000.png")).unwrap()
+    );
+    assert_eq!(manifest(&again)["settings"]["auto_exposure"], ev);
+    // A bad view is a one-line error.
+    fails(
+        &run([
+            "render",
+            "--view",
+            "filmic",
+            "--output",
+            dir.to_str().unwrap(),
+        ]),
+        &["filmic"],
+    );
+}
+
+#[test]
+fn unlit_white_model_stands_out_from_the_fallback_backdrop() {
+    // AnimatedTriangle.gltf: one white triangle, no light, no camera. It used to render
+    // white on the white of the uniform environment.
+    let dir = temp_dir("unlit");
+    let Some(p) = scene("AnimatedTriangle.gltf") else {
+        return;
+    };
+    let mut args = vec![
+        "render",
+        p.to_str().unwrap(),
+        "--frames",
+        "0",
+        "--output",
+        dir.to_str().unwrap(),
+    ];
+    args.extend(FAST);
+    let err = ok(&run(&args));
+    assert!(err.contains("no light"), "{err}");
+    let img = chronolux_io::image::read_exr(dir.join("frame_0000.exr")).unwrap();
+    // Camera rays that miss show the backdrop, 0.05 exactly (every sample of a corner
+    // pixel misses).
+    let backdrop = img.pixels[0];
+    assert!(
+        (backdrop - glam::Vec3::splat(0.05)).abs().max_element() < 1e-6,
+        "{backdrop}"
+    );
+    let model: Vec<_> = img
+        .pixels
+        .iter()
+        .filter(|p| (**p - backdrop).abs().max_element() > 1e-3)
+        .collect();
+    // The triangle covers a part of the automatic framing and is lit: a vertical
+    // white face under the gradient receives E/π = 0.6 (see `default_environment`), over
+    // ten times the backdrop.
+    assert!(
+        model.len() > img.pixels.len() / 20,
+        "{} pixels",
+        model.len()
+    );
+    let mean = model.iter().map(|p| p.x + p.y + p.z).sum::<f32>() / (3.0 * model.len() as f32);
+    assert!(mean > 0.2, "mean of the model {mean}");
+    // And in the PNG the model is clearly lighter than the backdrop.
+    let png = chronolux_io::image::read_png_rgb8(dir.join("frame_0000.png")).unwrap();
+    let max = png.pixels.iter().map(|p| p[1]).max().unwrap();
+    assert!(
+        max as i32 - png.pixels[0][1] as i32 > 80,
+        "{max} vs {:?}",
+        png.pixels[0]
+    );
+}

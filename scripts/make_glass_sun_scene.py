@@ -1,0 +1,96 @@
+#!/usr/bin/env python3
+"""Writes docs/scenes/glass-sun.gltf: a grey ground, a white cube and a red-glass cube
+(KHR_materials_transmission + KHR_materials_volume: attenuation colour (0.9, 0.25, 0.15) at
+0.4 m, thickness 1) lit by a 3000 lux directional sun, with a camera. Used for the pictures in
+docs/ (issue 15: coloured glass and a sun-lit scene at default settings)."""
+import base64, json, math, struct, sys
+from pathlib import Path
+
+
+def cube(c, h):
+    quads = [((0, 0, 1), (1, 0, 0)), ((0, 0, -1), (-1, 0, 0)), ((1, 0, 0), (0, 0, -1)),
+             ((-1, 0, 0), (0, 0, 1)), ((0, 1, 0), (1, 0, 0)), ((0, -1, 0), (1, 0, 0))]
+    pos, nrm, idx = [], [], []
+    for n, u in quads:
+        v = (n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0])
+        base = len(pos)
+        for a, b in [(-1, -1), (1, -1), (1, 1), (-1, 1)]:
+            pos.append(tuple(c[i] + h * (n[i] + a * u[i] + b * v[i]) for i in range(3)))
+            nrm.append(n)
+        idx += [base, base + 1, base + 2, base, base + 2, base + 3]
+    return pos, nrm, idx
+
+
+def ground(s):
+    pos = [(-s, 0, -s), (-s, 0, s), (s, 0, s), (s, 0, -s)]
+    return pos, [(0, 1, 0)] * 4, [0, 1, 2, 0, 2, 3]
+
+
+meshes = [ground(6.0), cube((-0.8, 0.5, 0.0), 0.5), cube((0.8, 0.5, 0.0), 0.5)]
+buf = bytearray()
+views, accessors, gl_meshes = [], [], []
+for mi, (pos, nrm, idx) in enumerate(meshes):
+    prim = {}
+    for name, data, fmt, typ in [("POSITION", pos, "3f", "VEC3"), ("NORMAL", nrm, "3f", "VEC3")]:
+        off = len(buf)
+        for p in data:
+            buf += struct.pack("<" + fmt, *p)
+        views.append({"buffer": 0, "byteOffset": off, "byteLength": len(buf) - off})
+        acc = {"bufferView": len(views) - 1, "componentType": 5126, "count": len(data), "type": typ}
+        if name == "POSITION":
+            acc["min"] = [min(p[i] for p in data) for i in range(3)]
+            acc["max"] = [max(p[i] for p in data) for i in range(3)]
+        accessors.append(acc)
+        prim.setdefault("attributes", {})[name] = len(accessors) - 1
+    off = len(buf)
+    for i in idx:
+        buf += struct.pack("<H", i)
+    while len(buf) % 4:
+        buf += b"\0"
+    views.append({"buffer": 0, "byteOffset": off, "byteLength": 2 * len(idx)})
+    accessors.append({"bufferView": len(views) - 1, "componentType": 5123, "count": len(idx), "type": "SCALAR"})
+    prim["indices"] = len(accessors) - 1
+    prim["material"] = mi
+    gl_meshes.append({"primitives": [prim]})
+
+# Sun: 3000 lux, from the upper left front (the light travels along the node's −Z).
+yaw, pitch = math.radians(-35), math.radians(-50)
+qy = (0, math.sin(yaw / 2), 0, math.cos(yaw / 2))
+qx = (math.sin(pitch / 2), 0, 0, math.cos(pitch / 2))
+def qmul(a, b):
+    ax, ay, az, aw = a; bx, by, bz, bw = b
+    return (aw*bx + ax*bw + ay*bz - az*by, aw*by - ax*bz + ay*bw + az*bx,
+            aw*bz + ax*by - ay*bx + az*bw, aw*bw - ax*bx - ay*by - az*bz)
+sun_q = qmul(qy, qx)
+cam_pitch = math.radians(-18)
+doc = {
+    "asset": {"version": "2.0", "generator": "chronolux scripts/make_glass_sun_scene.py"},
+    "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_volume"],
+    "extensions": {"KHR_lights_punctual": {"lights": [
+        {"name": "sun", "type": "directional", "intensity": 3000.0, "color": [1.0, 0.96, 0.9]}]}},
+    "scene": 0,
+    "scenes": [{"nodes": [0, 1, 2, 3, 4]}],
+    "nodes": [
+        {"name": "ground", "mesh": 0}, {"name": "white cube", "mesh": 1},
+        {"name": "red glass", "mesh": 2},
+        {"name": "sun", "rotation": list(sun_q), "extensions": {"KHR_lights_punctual": {"light": 0}}},
+        {"name": "camera", "camera": 0, "translation": [0.0, 1.9, 5.2],
+         "rotation": [math.sin(cam_pitch / 2), 0, 0, math.cos(cam_pitch / 2)]},
+    ],
+    "cameras": [{"type": "perspective", "perspective": {"yfov": 0.6, "znear": 0.05}}],
+    "meshes": gl_meshes,
+    "materials": [
+        {"name": "ground", "pbrMetallicRoughness": {"baseColorFactor": [0.45, 0.45, 0.45, 1], "metallicFactor": 0, "roughnessFactor": 0.9}},
+        {"name": "white", "pbrMetallicRoughness": {"baseColorFactor": [0.85, 0.85, 0.85, 1], "metallicFactor": 0, "roughnessFactor": 0.6}},
+        {"name": "red glass", "pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 0.0},
+         "extensions": {"KHR_materials_transmission": {"transmissionFactor": 1.0},
+                        "KHR_materials_volume": {"thicknessFactor": 1.0, "attenuationDistance": 0.4,
+                                                 "attenuationColor": [0.9, 0.25, 0.15]}}},
+    ],
+    "buffers": [{"byteLength": len(buf), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(buf)).decode()}],
+    "bufferViews": views,
+    "accessors": accessors,
+}
+out = Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent.parent / "docs/scenes/glass-sun.gltf")
+out.write_text(json.dumps(doc, indent=1))
+print(out)

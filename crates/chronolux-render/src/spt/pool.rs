@@ -34,7 +34,7 @@ pub struct RecVertex {
     pub instance: u32,
     pub material: u32,
     pub tri: TriRef,
-    /// Element side deposited on, [`NONE`] for a delta (purely specular) vertex.
+    /// Element side deposited on, `NONE` for a delta (purely specular) vertex.
     pub slot: u32,
     pub kind: u8,
     pub power: Rgb,
@@ -43,7 +43,7 @@ pub struct RecVertex {
 /// A photon's path as last shot: what it touched and what it deposited.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PhotonRecord {
-    /// Emitting light ([`NONE`]: nothing emitted).
+    /// Emitting light (`NONE`: nothing emitted).
     pub light: u32,
     /// Where the photon left the light.
     pub origin: Vec3,

@@ -173,9 +173,7 @@ pub fn frame_context(technique: &dyn Technique, settings: &Value) -> FrameContex
             exact: true,
         };
     }
-    let window = find_key(settings, "window")
-        .and_then(|k| k.split('.').try_fold(settings, |v, p| v.get(p)).cloned())
-        .and_then(|v| v.as_u64());
+    let window = get_key(settings, "window").and_then(Value::as_u64);
     match (c.window, window) {
         (true, Some(k)) => FrameContext {
             before: k as u32,
@@ -300,6 +298,13 @@ pub fn find_key(settings: &Value, key: &str) -> Option<String> {
     let mut hits = all.into_iter().filter(|k| k.ends_with(&suffix));
     let first = hits.next()?;
     hits.next().is_none().then_some(first)
+}
+
+/// The value of `key` in `settings`, found as [`find_key`] finds it.
+pub fn get_key<'a>(settings: &'a Value, key: &str) -> Option<&'a Value> {
+    find_key(settings, key)?
+        .split('.')
+        .try_fold(settings, |v, p| v.get(p))
 }
 
 /// Parses the value of `--set key=value`: JSON when it is JSON (numbers, `true`, `null`,

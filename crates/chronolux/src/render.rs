@@ -342,12 +342,8 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     };
     let options = run::RunOptions {
         passes,
-        seed: registry::find_key(&config.technique, "seed")
-            .and_then(|k| {
-                k.split('.')
-                    .try_fold(&config.technique, |v, p| v.get(p))
-                    .and_then(|v| v.as_u64())
-            })
+        seed: registry::get_key(&config.technique, "seed")
+            .and_then(serde_json::Value::as_u64)
             .unwrap_or(0),
     };
     let progress = Progress::new(w, h, frames.len());

@@ -7,6 +7,7 @@
 //! over the instances rebuilt per frame (a handful of boxes). Closest-hit and any-hit
 //! queries take an `accept` filter so alpha-masked surfaces can be skipped during traversal.
 
+pub mod build;
 pub mod multi_frame;
 
 use crate::geometry::{Bounds3, PreparedTriangle, Ray};
@@ -15,7 +16,6 @@ use obvhs::{
     BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, ray::Ray as ORay, ray::RayHit, triangle::Triangle,
 };
 use std::sync::Arc;
-use std::time::Duration;
 
 /// Identifies a triangle of the frame: geometry (a primitive placed by a node) and index.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -54,6 +54,8 @@ pub struct Blas {
     /// Some triangle needs the `accept` filter (alpha-tested material).
     pub needs_filter: bool,
     pub bounds: Bounds3,
+    /// Which builder made the BVH ([`build`]).
+    pub builder: build::Builder,
 }
 
 impl Blas {
@@ -84,6 +86,7 @@ impl Blas {
                 refs: vec![],
                 needs_filter,
                 bounds,
+                builder: build::Builder::Ploc,
             };
         }
         let otris: Vec<Triangle> = items
@@ -94,11 +97,7 @@ impl Blas {
                 v2: v[2].into(),
             })
             .collect();
-        let bvh = obvhs::cwbvh::builder::build_cwbvh_from_tris(
-            &otris,
-            BvhBuildParams::medium_build(),
-            &mut Duration::default(),
-        );
+        let (bvh, builder) = build::build_cwbvh(&otris, BvhBuildParams::medium_build());
         let mut tris = Vec::with_capacity(bvh.primitive_indices.len());
         let mut refs = Vec::with_capacity(bvh.primitive_indices.len());
         for &i in &bvh.primitive_indices {
@@ -112,6 +111,7 @@ impl Blas {
             refs,
             needs_filter,
             bounds,
+            builder,
         }
     }
 
@@ -306,11 +306,7 @@ impl Accel {
                     max: b.max.into(),
                 })
                 .collect();
-            Some(obvhs::cwbvh::builder::build_cwbvh(
-                &aabbs,
-                BvhBuildParams::fast_build(),
-                &mut Duration::default(),
-            ))
+            Some(build::build_cwbvh(&aabbs, BvhBuildParams::fast_build()).0)
         } else {
             None
         };

@@ -74,7 +74,6 @@ use crate::geometry::{Bounds3, Ray};
 use crate::math::Vec3A;
 use obvhs::{BvhBuildParams, aabb::Aabb, cwbvh::CwBvh, ray::RayHit};
 use std::sync::Arc;
-use std::time::Duration;
 
 /// Frames of a window as bits: bit `j` is the window's `j`-th frame (`first_frame + j`).
 pub type FrameMask = u64;
@@ -222,11 +221,7 @@ impl MultiFrameAccel {
                     max: b.max.into(),
                 })
                 .collect();
-            obvhs::cwbvh::builder::build_cwbvh(
-                &aabbs,
-                BvhBuildParams::medium_build(),
-                &mut Duration::default(),
-            )
+            super::build::build_cwbvh(&aabbs, BvhBuildParams::medium_build()).0
         });
         let stats = MultiFrameStats {
             frames: frames.len() as u32,

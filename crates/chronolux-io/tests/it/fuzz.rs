@@ -286,16 +286,15 @@ fn mutated_shared_scenes_never_panic_the_loader_or_frame_builder() {
 }
 
 #[test]
-#[ignore = "open bug (issue 15): obvhs-0.4.0 builds a BVH deeper than its traversal stack"]
 fn fuzz_crash_files_load_or_fail_without_panic() {
-    // Inputs the mutation runs crashed on and that are not fixed yet, kept as they were
-    // found (`CHRONOLUX_FUZZ_ITERS=600`, mutation 201 of RiggedSimple.glb):
+    // Inputs that crashed the mutation runs and libFuzzer, kept as they were found (`CHRONOLUX_FUZZ_ITERS=600`, mutation 201 of RiggedSimple.glb):
     // - fuzz-rigged-shear-skin.glb: RiggedSimple.glb with a node matrix entry set to
     //   4294967295 (a shear the loader decomposes with a warning). Skinning the mesh under
     //   it gives a bottom-level BVH whose depth reaches obvhs' TRAVERSAL_STACK_SIZE:
     //   `assertion failed: result.max_depth < TRAVERSAL_STACK_SIZE` in obvhs-0.4.0
     //   cwbvh/mod.rs:791 (its debug-build validation; a release build would traverse with
-    //   too small a stack).
+    //   too small a stack). Fixed by `chronolux_core::accel::build` (depth-checked build
+    //   with a median-split fallback).
     let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"));
     // - libfuzzer-crash-bvh-depth.glb: the same assertion, found by libFuzzer (fuzz/) after
     //   13,362 executions.

@@ -157,7 +157,7 @@ pub fn run(args: InfoArgs) -> Result<()> {
         if s.cameras.is_empty() {
             "none (automatic framing)".into()
         } else {
-            s.cameras.join(", ")
+            wrap_list(&s.cameras)
         }
     );
     outln!("skins        {}", s.skins);
@@ -171,7 +171,7 @@ pub fn run(args: InfoArgs) -> Result<()> {
             a.name,
             a.duration_s,
             a.channels,
-            a.targets.join(", ")
+            wrap_list(&a.targets)
         );
     }
     outln!(
@@ -179,13 +179,59 @@ pub fn run(args: InfoArgs) -> Result<()> {
         if s.dynamic_nodes.is_empty() {
             "no nodes".into()
         } else {
-            s.dynamic_nodes.join(", ")
+            wrap_list(&s.dynamic_nodes)
         }
     );
-    for w in &s.warnings {
-        outln!("warning      {w}");
-    }
+    // Warnings went to stderr once, as the scene loaded (`scene_input::load`).
     print_stdout(&out)
+}
+
+/// Names shown per list before `info` summarises the rest (`--json` lists them all).
+pub const LIST_SHOWN: usize = 12;
+/// Text width `info` wraps lists at.
+const WIDTH: usize = 100;
+/// Width of the label column (`"dynamic      "`).
+const LABEL: usize = 13;
+
+/// `a, b, c` wrapped at [`WIDTH`] under the label column, at most [`LIST_SHOWN`] names,
+/// then `… and N more (--json lists all)`.
+fn wrap_list<T: AsRef<str>>(items: &[T]) -> String {
+    let mut words: Vec<String> = items
+        .iter()
+        .take(LIST_SHOWN)
+        .enumerate()
+        .map(|(i, w)| {
+            let w = w.as_ref();
+            if i + 1 < items.len() {
+                format!("{w},")
+            } else {
+                w.to_string()
+            }
+        })
+        .collect();
+    if items.len() > LIST_SHOWN {
+        words.push(format!(
+            "… and {} more ({} in all; --json lists them)",
+            items.len() - LIST_SHOWN,
+            items.len()
+        ));
+    }
+    let mut out = String::new();
+    let mut col = LABEL;
+    for w in words {
+        let len = w.chars().count();
+        if col > LABEL && col + 1 + len > WIDTH {
+            out.push('\n');
+            out.push_str(&" ".repeat(LABEL));
+            col = LABEL;
+        } else if col > LABEL {
+            out.push(' ');
+            col += 1;
+        }
+        out.push_str(&w);
+        col += len;
+    }
+    out
 }
 
 /// Writes to stdout; a closed pipe (`chronolux info x.glb | head`) is not an error.

@@ -46,6 +46,23 @@ pub fn load(args: &SceneArgs) -> Result<SceneInput> {
             c.name = format!("camera{i}");
         }
     }
+    // Each distinct warning once (a file can trigger the same one per primitive or
+    // channel), with how often it occurred; `info --json` gets the same list.
+    let mut counts: Vec<(String, usize)> = Vec::new();
+    let mut index: std::collections::HashMap<String, usize> = std::collections::HashMap::new();
+    for w in desc.warnings.drain(..) {
+        match index.get(&w) {
+            Some(&i) => counts[i].1 += 1,
+            None => {
+                index.insert(w.clone(), counts.len());
+                counts.push((w, 1));
+            }
+        }
+    }
+    desc.warnings = counts
+        .into_iter()
+        .map(|(w, n)| if n > 1 { format!("{w} (×{n})") } else { w })
+        .collect();
     for w in &desc.warnings {
         log::warn!("{w}");
     }

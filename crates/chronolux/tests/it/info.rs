@@ -94,3 +94,62 @@ fn info_lists_unnamed_cameras_by_their_cli_name() {
     assert!(cams[0].starts_with("camera0 (perspective"), "{cams:?}");
     assert!(cams[1].starts_with("camera1 (orthographic"), "{cams:?}");
 }
+
+#[test]
+fn long_lists_are_wrapped_and_summarised_and_warnings_print_once_on_stderr() {
+    // 40 animated nodes (a rig's joints in miniature): `info` shows a wrapped, shortened
+    // list; `--json` keeps all 40. An unsupported optional extension warns once, on stderr.
+    let dir = temp_dir("info-long-lists");
+    let (mut v, mut bytes) = tiny(&TRI, &[0, 1, 2]);
+    let times = bytes.len();
+    bytes.extend([0.0f32, 1.0].iter().flat_map(|f| f.to_le_bytes()));
+    let moves = bytes.len();
+    bytes.extend(
+        [0.0f32, 0.0, 0.0, 0.0, 1.0, 0.0]
+            .iter()
+            .flat_map(|f| f.to_le_bytes()),
+    );
+    v["buffers"][0]["byteLength"] = bytes.len().into();
+    v["bufferViews"].as_array_mut().unwrap().extend([
+        serde_json::json!({"buffer": 0, "byteOffset": times, "byteLength": 8}),
+        serde_json::json!({"buffer": 0, "byteOffset": moves, "byteLength": 24}),
+    ]);
+    v["accessors"].as_array_mut().unwrap().extend([
+        serde_json::json!({"bufferView": 2, "componentType": 5126, "count": 2, "type": "SCALAR",
+                           "min": [0.0], "max": [1.0]}),
+        serde_json::json!({"bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC3"}),
+    ]);
+    let n = 40;
+    let nodes: Vec<Value> = (0..n)
+        .map(|i| serde_json::json!({"name": format!("a_rather_long_joint_name_{i:03}"), "mesh": 0}))
+        .collect();
+    v["nodes"] = nodes.into();
+    v["scenes"][0]["nodes"] = (0..n).collect::<Vec<_>>().into();
+    v["animations"] = serde_json::json!([{
+        "samplers": [{"input": 2, "output": 3}],
+        "channels": (0..n).map(|i| serde_json::json!({"sampler": 0, "target": {"node": i, "path": "translation"}})).collect::<Vec<_>>()
+    }]);
+    v["extensionsUsed"] = serde_json::json!(["EXT_made_up_for_this_test"]);
+    let p = write_gltf(&dir, &v, Some(&bytes));
+    let out = run(["info", p.to_str().unwrap()]);
+    ok(&out);
+    let text = stdout(&out);
+    assert!(text.lines().all(|l| l.chars().count() <= 100), "{text}");
+    assert!(
+        text.contains("… and 28 more (40 in all; --json lists them)"),
+        "{text}"
+    );
+    assert!(
+        !text.contains("EXT_made_up_for_this_test"),
+        "warnings go to stderr: {text}"
+    );
+    assert_eq!(
+        stderr(&out).matches("EXT_made_up_for_this_test").count(),
+        1,
+        "{}",
+        stderr(&out)
+    );
+    let json = run(["info", p.to_str().unwrap(), "--json"]);
+    let j: Value = serde_json::from_str(&stdout(&json)).unwrap();
+    assert_eq!(j["dynamic_nodes"].as_array().unwrap().len(), n);
+}

@@ -691,6 +691,22 @@ impl FrameBuilder {
         }
     }
 
+    /// The camera may move (or change) during the clip: its node or an ancestor is
+    /// animated, or, for the automatic camera (framed from the scene's bounds), anything
+    /// is. Derived from the animation (conservative: a channel whose keys differ counts
+    /// even if the camera happens to return), never from rendered frames.
+    pub fn camera_may_move(&self) -> bool {
+        let name = match &self.camera {
+            CameraChoice::First => None,
+            CameraChoice::Named(n) => Some(n.as_str()),
+        };
+        let dynamic = super::anim::dynamic_nodes(&self.desc, self.anim);
+        match find_camera(&self.desc, name) {
+            Some((node, _)) => dynamic[node.index()],
+            None => dynamic.iter().any(|&d| d),
+        }
+    }
+
     fn camera_at(&self, pose: &Pose, bounds: Bounds3, lights: &[Light], radius: f32) -> Camera {
         let name = match &self.camera {
             CameraChoice::First => None,

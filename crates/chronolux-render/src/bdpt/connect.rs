@@ -246,7 +246,8 @@ pub fn mis_weight(
         };
         ri *= remap(rev) / remap(v.pdf_fwd);
         let delta_i = i != t - 1 && v.delta;
-        if !delta_i && !cv(i - 1).delta {
+        // i = 1 is the light-tracing strategy (one camera vertex).
+        if !delta_i && !cv(i - 1).delta && (i > 1 || settings.light_tracing) {
             sum += h(ri);
         }
     }

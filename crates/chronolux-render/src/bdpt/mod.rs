@@ -62,6 +62,18 @@ pub struct BdptSettings {
     /// MIS heuristic. Default power.
     #[serde(default)]
     pub mis: MisHeuristic,
+    /// Use the light-tracing strategies (t = 1: light-subpath vertices connected to the
+    /// camera and splatted). Without them the remaining strategies' MIS weights sum to one
+    /// on their own (they all sample the first eye vertex from the camera, so the camera's
+    /// density cancels from their ratios): what stbpt needs when the camera moves, where a
+    /// sample's weights, computed in its own frame, must stay valid in the frames it
+    /// serves. Default true.
+    #[serde(default = "yes")]
+    pub light_tracing: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl Default for BdptSettings {
@@ -72,6 +84,7 @@ impl Default for BdptSettings {
             rr_depth: 5,
             seed: 0,
             mis: MisHeuristic::Power,
+            light_tracing: true,
         }
     }
 }
@@ -371,7 +384,11 @@ impl SplattingEstimator for Bdpt {
             let mut l = Rgb::ZERO;
             for t in 1..=camera.len() {
                 for s_ in 0..=light.len() {
-                    if (s_ == 1 && t == 1) || s_ + t < 2 || s_ + t - 1 > max_segments {
+                    if (s_ == 1 && t == 1)
+                        || (t == 1 && !self.settings.light_tracing)
+                        || s_ + t < 2
+                        || s_ + t - 1 > max_segments
+                    {
                         continue;
                     }
                     if let Some(c) = connect(scene, s, light, camera, s_, t, sampler, stats) {

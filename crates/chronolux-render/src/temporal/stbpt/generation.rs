@@ -215,6 +215,9 @@ impl Generation<'_> {
         invalid: &mut u64,
         mut record: Option<&mut Vec<(u32, Rgb, FrameMask)>>,
     ) {
+        if !self.bdpt.light_tracing {
+            return;
+        }
         let scene = &self.scenes[j];
         let (w, h) = (scene.camera.width, scene.camera.height);
         let max_segments = self.bdpt.depth() as usize;
@@ -623,9 +626,15 @@ impl Stbpt {
             }
         }
         self.open_films(scenes[jf].camera.width, scenes[jf].camera.height);
+        // A moving camera turns light tracing off for the whole sequence (module doc,
+        // "Bias"): the weights of the kept strategies then sum to one in every frame.
+        let bdpt = BdptSettings {
+            light_tracing: self.settings.bdpt.light_tracing && !source.builder().camera_may_move(),
+            ..self.settings.bdpt.clone()
+        };
         let gen_ = Generation {
             same_camera,
-            bdpt: &self.settings.bdpt,
+            bdpt: &bdpt,
             frames: &frames,
             scenes: &scenes,
             jf,

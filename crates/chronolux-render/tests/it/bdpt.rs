@@ -121,6 +121,16 @@ fn bdpt_agrees_with_path_tracer_on_the_demo() {
     let img = bdpt(256, None, MisHeuristic::Power).render(&scene, 0, &|_| {});
     assert_eq!(img.invalid_samples, 0);
     assert_agree(&img, &reference, "demo");
+    // Without the light-tracing strategies (what stbpt uses under a moving camera) the
+    // remaining weights still sum to one: the same image in expectation.
+    let no_lt = Bdpt::new(BdptSettings {
+        spp: 256,
+        light_tracing: false,
+        ..Default::default()
+    })
+    .render(&scene, 0, &|_| {});
+    assert_eq!(no_lt.invalid_samples, 0);
+    assert_agree(&no_lt, &reference, "demo without light tracing");
 }
 
 /// The demo room lit only by a point light under the ceiling, with a small diffuse shade

@@ -74,7 +74,7 @@ use super::cache::{
     stratum_direction,
 };
 use super::photon_map::PhotonMap;
-use super::store::{MemoryStore, PagedStore, Stratum, StoreStats, StrataStore};
+use super::store::{MemoryStore, PagedStore, StoreStats, StrataStore, Stratum};
 use super::view::{CacheQuery, EyeView, NoIndirect};
 use super::{
     BATCH, CacheSource, PmIcSettings, base_cell, frame_maps, gather_ray_hit, photon_base,
@@ -182,13 +182,7 @@ fn stratum_rngs(seed: u64, cast: u32, id: u64, idx: usize) -> (f32, f32, Pcg32) 
 
 /// Direction and `tan θ` of stratum `idx` of a record at normal frame `fr`, as cast in
 /// frame `cast`.
-pub fn stratum_dir(
-    s: &PmIcSettings,
-    fr: &Frame,
-    id: u64,
-    idx: usize,
-    cast: u32,
-) -> (Vec3, f32) {
+pub fn stratum_dir(s: &PmIcSettings, fr: &Frame, id: u64, idx: usize, cast: u32) -> (Vec3, f32) {
     let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
     let (xi, psi, _) = stratum_rngs(s.seed, cast, id, idx);
     stratum_direction(fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi)
@@ -441,13 +435,8 @@ impl IcSelective {
         }
         let dir = (!s.store_dir.is_empty()).then(|| std::path::PathBuf::from(&s.store_dir));
         Box::new(
-            PagedStore::new(
-                spr,
-                s.page_kb as usize * 1024,
-                s.cache_pages as usize,
-                dir,
-            )
-            .unwrap_or_else(|e| panic!("ic-selective: cannot create the strata file: {e}")),
+            PagedStore::new(spr, s.page_kb as usize * 1024, s.cache_pages as usize, dir)
+                .unwrap_or_else(|e| panic!("ic-selective: cannot create the strata file: {e}")),
         )
     }
 
@@ -484,7 +473,7 @@ impl IcSelective {
         let scene = &*scene_arc;
         let s = self.settings.pmic.clone();
         let spr = (s.gather_m.max(1) * s.gather_n.max(1)) as usize;
-        let budget = ((self.settings.refresh.clamp(0.0, 1.0) as f64 * spr as f64).ceil()) as usize;
+        let budget = (self.settings.refresh.clamp(0.0, 1.0) as f64 * spr as f64).ceil() as usize;
         if self.state.is_none() {
             let store = self.make_store();
             self.state = Some(State {
@@ -610,8 +599,10 @@ impl IcSelective {
         }
         let mut added = 0u64;
         for batch in points.chunks(BATCH) {
-            let need: Vec<&(u64, CacheQuery)> =
-                batch.iter().filter(|(_, q)| !cache.covers(q.p, q.n)).collect();
+            let need: Vec<&(u64, CacheQuery)> = batch
+                .iter()
+                .filter(|(_, q)| !cache.covers(q.p, q.n))
+                .collect();
             if need.is_empty() {
                 continue;
             }

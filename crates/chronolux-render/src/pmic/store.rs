@@ -63,7 +63,11 @@ impl Stratum {
     fn decode(b: &[u8]) -> Stratum {
         let w = |i: usize| u32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]]);
         Stratum {
-            l: Rgb::new(f32::from_bits(w(0)), f32::from_bits(w(1)), f32::from_bits(w(2))),
+            l: Rgb::new(
+                f32::from_bits(w(0)),
+                f32::from_bits(w(1)),
+                f32::from_bits(w(2)),
+            ),
             dist: f32::from_bits(w(3)),
             hit: w(4),
             cast: w(5),
@@ -253,7 +257,10 @@ impl PagedStore {
         page.dirty = false;
         page.last_use = self.clock;
         // Bytes past the end of the file were never written: empty strata.
-        let have = self.file_len.saturating_sub(pos).min(self.page_bytes as u64) as usize;
+        let have = self
+            .file_len
+            .saturating_sub(pos)
+            .min(self.page_bytes as u64) as usize;
         if have > 0 {
             self.file
                 .read_exact_at(&mut page.data[..have], pos)
@@ -322,49 +329,5 @@ impl StrataStore for PagedStore {
 
     fn stats(&self) -> StoreStats {
         self.stats
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn block(slot: u32, spr: usize) -> Vec<Stratum> {
-        (0..spr)
-            .map(|i| Stratum {
-                l: Rgb::new(slot as f32, i as f32 * 0.5, -1.0e-30),
-                dist: if i % 3 == 0 { f32::INFINITY } else { i as f32 },
-                hit: if i % 3 == 0 { Stratum::NO_HIT } else { slot ^ i as u32 },
-                cast: slot + 7,
-            })
-            .collect()
-    }
-
-    /// Pages of 2 records, 2 pages cached: writing 20 records evicts (and writes back)
-    /// pages, and every block reads back exactly; unwritten slots read empty; the
-    /// resident bytes never exceed the bound.
-    #[test]
-    fn paged_store_round_trips_through_eviction() {
-        let spr = 5;
-        let mut p = PagedStore::new(spr, 2 * spr * Stratum::BYTES, 2, None).unwrap();
-        let mut m = MemoryStore::new(spr);
-        for slot in (0..20).rev() {
-            p.write(slot, &block(slot, spr));
-            m.write(slot, &block(slot, spr));
-        }
-        let (mut a, mut b) = (vec![Stratum::EMPTY; spr], vec![Stratum::EMPTY; spr]);
-        for slot in [3, 17, 0, 19, 8, 25] {
-            p.read(slot, &mut a);
-            m.read(slot, &mut b);
-            let bits = |v: &[Stratum]| {
-                v.iter()
-                    .map(|s| (s.l.to_array().map(f32::to_bits), s.dist.to_bits(), s.hit, s.cast))
-                    .collect::<Vec<_>>()
-            };
-            assert_eq!(bits(&a), bits(&b), "slot {slot}");
-        }
-        let st = p.stats();
-        assert!(st.page_writes > 0 && st.page_reads > 0, "{st:?}");
-        assert!(st.peak_resident_bytes <= 2 * p.page_bytes() as u64, "{st:?}");
     }
 }

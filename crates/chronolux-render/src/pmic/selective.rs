@@ -27,7 +27,8 @@
 //!      this frame (an object that moved into or out of the direction); **all** strata
 //!      when a light or a material changed ([`FrameDelta::lights_changed`]: the maps'
 //!      radiance at every hit may differ, and the kernel cannot tell which light a hit's
-//!      photons came from, so no subset is known to be unaffected);
+//!      photons came from, so no subset is known to be unaffected; with
+//!      `recast_on_light_change = false` such changes are left to the refresh by age);
 //!    - then, up to a budget of `ceil(refresh · M·N)` strata per record (priority ones
 //!      count against it), strata chosen **by age**: the refresh probability of a stratum
 //!      is proportional to its age, and the strata are drawn without replacement with
@@ -113,6 +114,10 @@ pub struct IcSelectiveSettings {
     pub cache_pages: u32,
     /// Directory of the paged store's file; empty: the system's temporary directory.
     pub store_dir: String,
+    /// Re-cast every stratum in a frame where a light or a material changed (true,
+    /// default: no stale light), or leave such changes to the refresh by age (false: the
+    /// paper's treatment of a slowly moving sun; light lags by about `1/refresh` frames).
+    pub recast_on_light_change: bool,
 }
 
 impl Default for IcSelectiveSettings {
@@ -124,6 +129,7 @@ impl Default for IcSelectiveSettings {
             page_kb: 256,
             cache_pages: 64,
             store_dir: String::new(),
+            recast_on_light_change: true,
         }
     }
 }
@@ -488,7 +494,8 @@ impl IcSelective {
         let st = self.state.as_mut().expect("state made");
         let delta = FrameDelta::between(&st.prev, scene);
         let changed = delta.dynamic_instances();
-        let all_stale = delta.lights_changed() || delta.materials_changed();
+        let all_stale = self.settings.recast_on_light_change
+            && (delta.lights_changed() || delta.materials_changed());
         let eps = scene.scene_radius.max(1e-6) * 1e-4;
         let mut boxes = Vec::new();
         for (i, _) in changed.iter().enumerate().filter(|(_, c)| **c) {

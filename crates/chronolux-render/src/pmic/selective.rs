@@ -65,8 +65,8 @@
 //! error does not accumulate: after ≈ `1/refresh` frames every stratum is renewed.
 //!
 //! ## Memory
-//! In memory per record: position, normal, the record itself and bookkeeping (≈ 130
-//! bytes); the strata (`24 · M · N` bytes per record, 10 KiB at 12 × 36) are in the
+//! In memory per record: position, normal, the record itself and bookkeeping (≈ 160
+//! bytes, plus its entries in the cache's grid, rebuilt each frame); the strata (`24 · M · N` bytes per record, 10 KiB at 12 × 36) are in the
 //! store, whose resident part is bounded by `cache_pages × page_kb` KiB with the paged
 //! store (plus one chunk of [`CHUNK`] records' strata being refreshed).
 

@@ -115,8 +115,8 @@ pub struct IcSelectiveSettings {
     /// Directory of the paged store's file; empty: the system's temporary directory.
     pub store_dir: String,
     /// Re-cast every stratum in a frame where a light or a material changed (true,
-    /// default: no stale light), or leave such changes to the refresh by age (false: the
-    /// paper's treatment of a slowly moving sun; light lags by about `1/refresh` frames).
+    /// default: no stale light), or leave such changes to the refresh by age like any
+    /// other change of radiance at a hit (false: light lags by about `1/refresh` frames).
     pub recast_on_light_change: bool,
 }
 

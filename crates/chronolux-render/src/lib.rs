@@ -34,6 +34,9 @@
 //! - `ic-static-dynamic`: the same with a static cache per segment of frames and dynamic
 //!   photons (negative ones included) and a dynamic cache per frame, blended —
 //!   [`pmic::static_dynamic`].
+//! - `ic-selective`: `pm-ic` whose records keep their gather directions between frames (in
+//!   a paged store) and re-cast those a change reached plus a fraction chosen by age —
+//!   [`pmic::selective`].
 
 pub mod aov;
 pub mod bdpt;

@@ -201,6 +201,7 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
     &crate::temporal::spacetime_dept::TECHNIQUE,
     &crate::pmic::TECHNIQUE,
     &crate::pmic::static_dynamic::TECHNIQUE,
+    &crate::pmic::selective::TECHNIQUE,
     &crate::spt::TECHNIQUE,
 ];
 

@@ -112,27 +112,62 @@ pub fn gather(
     let mut l = vec![Rgb::ZERO; (m * np) as usize];
     let mut r = vec![f32::INFINITY; (m * np) as usize];
     let mut tan_theta = vec![0.0f32; (m * np) as usize];
-    let mut inv_r_sum = 0.0f64;
     for j in 0..m {
         for k in 0..np {
             let (xi, psi) = jitter(j, k);
-            let s2 = ((j as f32 + xi) / m as f32).min(1.0 - 1e-7);
-            let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
-            let phi = 2.0 * PI * (k as f32 + psi) / np as f32;
-            let local = Vec3::new(st * phi.cos(), st * phi.sin(), ct);
-            let dir = frame.from_local(local).normalize();
+            let (dir, tan) = stratum_direction(&frame, m, np, j, k, xi, psi);
             let i = (j * np + k) as usize;
-            tan_theta[i] = st / ct;
+            tan_theta[i] = tan;
             if let Some((li, dist)) = trace(dir) {
                 l[i] = li;
                 r[i] = dist.max(1e-6);
-                inv_r_sum += 1.0 / r[i] as f64;
             }
+        }
+    }
+    gather_from_strata(&frame, m, np, &l, &r, &tan_theta)
+}
+
+/// Direction (world space) and `tan θ` of stratum (j, k) of an `m × n_phi` gather around
+/// `frame`'s normal, jittered by (ξ, ψ) ∈ [0,1)² (see the module doc).
+#[inline]
+pub fn stratum_direction(
+    frame: &Frame,
+    m: u32,
+    n_phi: u32,
+    j: u32,
+    k: u32,
+    xi: f32,
+    psi: f32,
+) -> (Vec3, f32) {
+    let s2 = ((j as f32 + xi) / m as f32).min(1.0 - 1e-7);
+    let (st, ct) = (s2.sqrt(), (1.0 - s2).sqrt());
+    let phi = 2.0 * PI * (k as f32 + psi) / n_phi as f32;
+    let local = Vec3::new(st * phi.cos(), st * phi.sin(), ct);
+    (frame.from_local(local).normalize(), st / ct)
+}
+
+/// Irradiance, harmonic mean distance and gradients of a gather from its strata: per
+/// stratum `j·n_phi + k` the incident radiance `l`, the hit distance `r` (`∞`: nothing hit)
+/// and `tan θ` of its direction; `frame` is [`Frame::from_normal`] of the gather's normal.
+/// [`gather`] is this after tracing; the selective cache (`ic-selective`) calls it on
+/// strata cast in different frames.
+pub fn gather_from_strata(
+    frame: &Frame,
+    m: u32,
+    np: u32,
+    l: &[Rgb],
+    r: &[f32],
+    tan_theta: &[f32],
+) -> Gather {
+    let mut inv_r_sum = 0.0f64;
+    for &ri in r {
+        if ri.is_finite() {
+            inv_r_sum += 1.0 / ri as f64;
         }
     }
     let scale = PI / (m * np) as f32;
     let mut e = Rgb::ZERO;
-    for v in &l {
+    for v in l {
         e += *v;
     }
     e *= scale;
@@ -307,6 +342,12 @@ impl IrradianceCache {
     /// Calls `f(record, ε)` for every record valid at (x, n) (`ε < a`).
     #[inline]
     pub fn for_valid(&self, x: Vec3, n: Vec3, mut f: impl FnMut(&Record, f32)) {
+        self.for_valid_id(x, n, |_, rec, eps| f(rec, eps));
+    }
+
+    /// [`IrradianceCache::for_valid`] with each record's index (insertion order).
+    #[inline]
+    pub fn for_valid_id(&self, x: Vec3, n: Vec3, mut f: impl FnMut(u32, &Record, f32)) {
         for level in 0..LEVELS {
             if self.levels_used & (1 << level) == 0 {
                 continue;
@@ -319,7 +360,7 @@ impl IrradianceCache {
                 if let Some(eps) = rec.error(x, n)
                     && eps < self.accuracy
                 {
-                    f(rec, eps);
+                    f(id, rec, eps);
                 }
             }
         }

@@ -74,7 +74,9 @@
 
 pub mod cache;
 pub mod photon_map;
+pub mod selective;
 pub mod static_dynamic;
+pub mod store;
 pub mod view;
 
 use crate::integrator::{RenderedFrame, render_camera_rays};
@@ -217,6 +219,19 @@ pub fn gather_ray(
     dir: Vec3,
     rng: &mut Pcg32,
 ) -> Option<(Rgb, f32)> {
+    gather_ray_hit(scene, s, maps, x, n, dir, rng).map(|(l, d, _)| (l, d))
+}
+
+/// [`gather_ray`] with the instance of the first hit.
+pub fn gather_ray_hit(
+    scene: &FrameScene,
+    s: &PmIcSettings,
+    maps: &[&PhotonMap],
+    x: Vec3,
+    n: Vec3,
+    dir: Vec3,
+    rng: &mut Pcg32,
+) -> Option<(Rgb, f32, u32)> {
     let r_max = world_radius(scene, &s.global);
     let mut ray = spawn_ray(x, n, dir);
     let mut beta = Rgb::ONE;
@@ -225,7 +240,7 @@ pub fn gather_ray(
         let hit = scene.intersect(&ray)?;
         let si = scene.interaction(&hit, &ray);
         if first.is_none() {
-            first = Some((si.p - x).length());
+            first = Some(((si.p - x).length(), si.instance));
         }
         let wo = -ray.d.normalize();
         let mat = &scene.materials[si.material as usize];
@@ -237,7 +252,8 @@ pub fn gather_ray(
             for m in maps {
                 l += m.radiance(si.p, ns, wo, &bsdf, &s.global, r_max);
             }
-            return Some((beta * l, first.unwrap_or(0.0)));
+            let (d, inst) = first.unwrap_or((0.0, si.instance));
+            return Some((beta * l, d, inst));
         }
         let bs = bsdf.sample(
             wo,
@@ -251,7 +267,7 @@ pub fn gather_ray(
         }
         ray = spawn_ray(si.p, si.ng, bs.wi);
     }
-    first.map(|d| (Rgb::ZERO, d))
+    first.map(|(d, inst)| (Rgb::ZERO, d, inst))
 }
 
 /// A final gather at (x, n) reading `maps`, its strata jittered from `key`.

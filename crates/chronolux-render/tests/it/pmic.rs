@@ -342,7 +342,7 @@ use chronolux_render::sequence::SequenceRenderer;
 
 /// The Cornell box with a small white diffuse cube (half-size 0.2) sliding along x on the
 /// floor by 0.4 per second (cornell-moving's configuration in miniature).
-fn cornell_moving() -> SceneDesc {
+pub fn cornell_moving() -> SceneDesc {
     let mut d = cornell_box();
     d.materials.push(Material::diffuse("cube", Rgb::splat(0.8)));
     let mat = MaterialId(d.materials.len() as u32 - 1);

@@ -8,6 +8,7 @@ mod delta;
 mod dept;
 mod determinism;
 mod furnace;
+mod light;
 mod matrix;
 mod multi_frame;
 mod peer;

@@ -385,6 +385,8 @@ impl SequenceRenderer for Stbpt {
             )]
             .into_iter()
             .collect(),
+            // The reused subpaths are not split into direct and indirect light.
+            light: None,
         }
     }
 }

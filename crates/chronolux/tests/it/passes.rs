@@ -57,6 +57,82 @@ fn passes_are_layers_of_the_exr_for_any_method() {
     );
 }
 
+/// `direct` and `indirect` are layers that add up to the beauty exactly (f32 EXR);
+/// a method that does not separate them refuses them before rendering.
+#[test]
+fn direct_and_indirect_add_up_to_the_beauty_and_are_refused_where_not_separated() {
+    let dir = temp_dir("passes-light");
+    ok(&run([
+        "render",
+        "--method",
+        "path",
+        "--passes",
+        "light,depth",
+        "--frames",
+        "4",
+        "--resolution",
+        "16x16",
+        "--spp",
+        "2",
+        "--output",
+        dir.to_str().unwrap(),
+        "--no-preview",
+    ]));
+    let exr = dir.join("frame_0004.exr");
+    let beauty = read_exr(&exr).unwrap().pixels;
+    let ch = |n: &str| read_exr_channel(&exr, n).unwrap().unwrap();
+    let mut indirect_sum = 0.0f64;
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let d = ch(&format!("ViewLayer.Direct.{name}"));
+        let i = ch(&format!("ViewLayer.Indirect.{name}"));
+        for k in 0..beauty.len() {
+            assert_eq!(d[k] + i[k], beauty[k][c], "pixel {k} channel {name}");
+            indirect_sum += i[k] as f64;
+        }
+    }
+    // The demo is a closed room: its walls light each other.
+    assert!(indirect_sum > 0.0);
+    // A method that does not separate them: an error naming it, before any frame.
+    let dir = temp_dir("passes-light-bad");
+    fails(
+        &run([
+            "render",
+            "--method",
+            "stbpt",
+            "--passes",
+            "direct",
+            "--frames",
+            "4",
+            "--output",
+            dir.to_str().unwrap(),
+        ]),
+        &["stbpt", "does not separate direct and indirect"],
+    );
+    assert!(!dir.join("frame_0004.exr").exists());
+    // `all` writes them where the method separates them, and not where it does not.
+    for (method, has) in [("path", true), ("stbpt", false)] {
+        let dir = temp_dir(&format!("passes-all-{method}"));
+        ok(&run([
+            "render",
+            "--method",
+            method,
+            "--passes",
+            "all",
+            "--frames",
+            "4",
+            "--resolution",
+            "8x8",
+            "--spp",
+            "1",
+            "--output",
+            dir.to_str().unwrap(),
+            "--no-preview",
+        ]));
+        let c = read_exr_channel(dir.join("frame_0004.exr"), "ViewLayer.Direct.G").unwrap();
+        assert_eq!(c.is_some(), has, "{method}");
+    }
+}
+
 #[cfg(not(feature = "oidn"))]
 #[test]
 fn denoise_without_the_feature_is_a_clear_error() {

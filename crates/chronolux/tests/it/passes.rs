@@ -243,6 +243,21 @@ fn denoise_without_the_feature_is_a_clear_error() {
         &run(["render", "--denoise", "--output", dir.to_str().unwrap()]),
         &["--denoise", "--features oidn"],
     );
+    // The same for the equal-quality benchmark, before any reference is read.
+    fails(
+        &run([
+            "bench",
+            "quality",
+            "--frames",
+            "0..2",
+            "--reference",
+            dir.to_str().unwrap(),
+            "--target-flip",
+            "0.1",
+            "--denoise",
+        ]),
+        &["--denoise", "--features oidn"],
+    );
 }
 
 /// Denoising really denoises: against a converged path-traced reference of the same

@@ -26,6 +26,9 @@
 //!   morphed geometry) and projected with that frame's camera, so camera motion is
 //!   included. 0 at a sequence end (no frame on that side), where the ray escapes, or
 //!   where the point is behind the other frame's camera.
+//! - **direct**, **indirect**: not made here but by the light transport of a technique
+//!   that separates them ([`crate::integrator::LightSplit`] has the convention; they add
+//!   up to the beauty exactly); [`PassSet::resolve`] refuses them for any other one.
 
 use crate::integrator::tile_rect;
 use chronolux_core::color::Rgb;
@@ -42,20 +45,30 @@ pub const DEPTH_MISS: f32 = 1e10;
 /// Seed salt separating the passes' sample streams from the beauty's.
 const AOV_STREAM: u64 = 0x4a4f_5653_5041_5353;
 
-/// Which passes to make.
+/// Which passes to make. `direct` and `indirect` are the technique's light split
+/// ([`crate::integrator::LightSplit`]), not made here: only a technique that separates
+/// them can write them ([`PassSet::resolve`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct PassSet {
     pub albedo: bool,
     pub normal: bool,
     pub depth: bool,
     pub motion: bool,
+    pub direct: bool,
+    pub indirect: bool,
+    /// The preset `all` was given: direct and indirect too, where the technique
+    /// separates them (and silently not where it does not).
+    pub all: bool,
 }
 
 impl PassSet {
     /// Every pass name `--passes` accepts.
-    pub const NAMES: [&'static str; 4] = ["albedo", "normal", "depth", "motion"];
+    pub const NAMES: [&'static str; 6] =
+        ["albedo", "normal", "depth", "motion", "direct", "indirect"];
 
-    /// Parses `albedo,normal,…`, or the presets `all` and `denoise` (albedo, normal).
+    /// Parses `albedo,normal,…`, or the presets `all` (every pass the technique can
+    /// write), `denoise` (albedo, normal) and `light` (direct, indirect).
     pub fn parse(list: &str) -> Result<PassSet, String> {
         let mut p = PassSet::default();
         for name in list.split(',').map(str::trim).filter(|s| !s.is_empty()) {
@@ -64,21 +77,26 @@ impl PassSet {
                 "normal" => p.normal = true,
                 "depth" => p.depth = true,
                 "motion" => p.motion = true,
+                "direct" => p.direct = true,
+                "indirect" => p.indirect = true,
+                "light" => {
+                    p.direct = true;
+                    p.indirect = true;
+                }
                 "denoise" => {
                     p.albedo = true;
                     p.normal = true;
                 }
                 "all" => {
-                    p = PassSet {
-                        albedo: true,
-                        normal: true,
-                        depth: true,
-                        motion: true,
-                    }
+                    p.albedo = true;
+                    p.normal = true;
+                    p.depth = true;
+                    p.motion = true;
+                    p.all = true;
                 }
                 other => {
                     return Err(format!(
-                        "unknown pass '{other}' (passes: {}; presets: all, denoise)",
+                        "unknown pass '{other}' (passes: {}; presets: all, denoise, light)",
                         Self::NAMES.join(", ")
                     ));
                 }
@@ -87,7 +105,30 @@ impl PassSet {
         Ok(p)
     }
 
+    /// The set for a technique that does (`separates`) or does not separate direct and
+    /// indirect light: `all` takes them where it does; naming `direct` or `indirect`
+    /// for a technique that does not is an error.
+    pub fn resolve(self, method: &str, separates: bool) -> Result<PassSet, String> {
+        if (self.direct || self.indirect) && !separates {
+            return Err(format!(
+                "method '{method}' does not separate direct and indirect light, so it cannot write the passes direct and indirect (README, \"Render passes and denoising\", lists the methods that do)"
+            ));
+        }
+        let mut p = self;
+        if p.all && separates {
+            p.direct = true;
+            p.indirect = true;
+        }
+        Ok(p)
+    }
+
+    /// Whether any pass is asked for.
     pub fn any(&self) -> bool {
+        self.geometric() || self.direct || self.indirect
+    }
+
+    /// Whether any of the passes made here (from geometry, not light transport) is.
+    pub fn geometric(&self) -> bool {
         self.albedo || self.normal || self.depth || self.motion
     }
 
@@ -98,6 +139,9 @@ impl PassSet {
             normal: self.normal || o.normal,
             depth: self.depth || o.depth,
             motion: self.motion || o.motion,
+            direct: self.direct || o.direct,
+            indirect: self.indirect || o.indirect,
+            all: self.all || o.all,
         }
     }
 }

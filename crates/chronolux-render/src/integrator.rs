@@ -22,6 +22,27 @@ pub struct RenderedFrame {
     /// The technique's own report of this frame (photons shot, reuse statistics, …),
     /// merged into the frame's record in `run.json`. Empty for plain integrators.
     pub report: Report,
+    /// The image split into direct and indirect light, from a technique that separates
+    /// them ([`RadianceEstimator::separates_light`]); `None` from every other one.
+    pub light: Option<LightSplit>,
+}
+
+/// A frame's light split into two images that add up to the beauty: for every pixel,
+/// `direct + indirect == pixels` exactly (the driver forms the beauty as that sum).
+///
+/// Convention (a first-non-delta-vertex split): **direct** is emission (surface or
+/// environment) that reaches the camera with no scattering or through delta (mirror,
+/// smooth glass) bounces only, plus light arriving at the first non-delta vertex straight
+/// from an emitter (that vertex's light sample and the emission its BSDF-sampled ray hits,
+/// each with its MIS weight); **indirect** is everything else (two or more scattering
+/// vertices, one of them non-delta, including caustics `light → specular → first
+/// non-delta vertex`). Blender's DiffDir + GlossDir + TransDir + Emit + Env correspond to
+/// the direct image, its DiffInd + GlossInd + TransInd to the indirect one, without the
+/// split by lobe.
+#[derive(Clone, Debug, Default)]
+pub struct LightSplit {
+    pub direct: Vec<Rgb>,
+    pub indirect: Vec<Rgb>,
 }
 
 /// A technique's per-frame report: named JSON values (`"photons"`, `"reuse"`, …).
@@ -46,6 +67,10 @@ pub trait Integrator: Sync {
         let _ = (spp, round, half);
         None
     }
+    /// Whether its frames carry [`RenderedFrame::light`] (see [`LightSplit`]).
+    fn separates_light(&self) -> bool {
+        false
+    }
 }
 
 /// An estimator of radiance along one camera ray.
@@ -58,6 +83,25 @@ pub trait RadianceEstimator: Sync {
         sampler: &mut PixelSampler,
         stats: &mut Stats,
     ) -> Rgb;
+
+    /// Whether [`Self::li_split`] separates direct from indirect light ([`LightSplit`]'s
+    /// convention). False by default: such an estimator writes no light split.
+    fn separates_light(&self) -> bool {
+        false
+    }
+
+    /// The sample [`Self::li`] would return, as `[direct, indirect]` (their sum is the
+    /// sample's radiance). Called instead of `li` when [`Self::separates_light`]; the
+    /// default (never used then) counts everything as direct.
+    fn li_split(
+        &self,
+        scene: &FrameScene,
+        ray: &chronolux_core::geometry::Ray,
+        sampler: &mut PixelSampler,
+        stats: &mut Stats,
+    ) -> [Rgb; 2] {
+        [self.li(scene, ray, sampler, stats), Rgb::ZERO]
+    }
 }
 
 /// The scene(s) a driver traces a frame's pixel samples in: the frame's one scene, or
@@ -140,6 +184,7 @@ pub(crate) fn camera_rays<E: RadianceEstimator>(
 ) -> RenderedFrame {
     let cam = &scenes.first().camera;
     let (w, h) = (cam.width, cam.height);
+    let split = est.separates_light();
     let tile = tile.max(1);
     let tiles_x = w.div_ceil(tile);
     let tiles_y = h.div_ceil(tile);
@@ -147,6 +192,8 @@ pub(crate) fn camera_rays<E: RadianceEstimator>(
     let results = parallel::map_chunks(n_tiles, 1, |range| {
         let (x0, y0, tw, th) = tile_rect(range.start as u32, tiles_x, tile, w, h);
         let mut film = Film::new(tw, th);
+        // Direct and indirect films, for an estimator that separates them.
+        let mut parts = split.then(|| [Film::new(tw, th), Film::new(tw, th)]);
         let mut stats = Stats::default();
         let mut invalid = 0u64;
         for y in 0..th {
@@ -158,36 +205,67 @@ pub(crate) fn camera_rays<E: RadianceEstimator>(
                     let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
                     let scene = scenes.pick(&mut sampler);
                     let ray = scene.camera.generate_ray(raster);
-                    let l = est.li(scene, &ray, &mut sampler, &mut stats);
+                    let (l, dl) = match parts {
+                        None => (est.li(scene, &ray, &mut sampler, &mut stats), None),
+                        Some(_) => {
+                            let [d, i] = est.li_split(scene, &ray, &mut sampler, &mut stats);
+                            (d + i, Some([d, i]))
+                        }
+                    };
                     stats.samples += 1;
-                    if l.is_finite() {
-                        film.add(x, y, l, 1.0);
-                    } else {
+                    let ok = l.is_finite();
+                    if !ok {
                         invalid += 1;
-                        film.add(x, y, Rgb::ZERO, 1.0);
+                    }
+                    film.add(x, y, if ok { l } else { Rgb::ZERO }, 1.0);
+                    if let (Some(films), Some(dl)) = (parts.as_mut(), dl) {
+                        for (f, v) in films.iter_mut().zip(dl) {
+                            f.add(x, y, if ok { v } else { Rgb::ZERO }, 1.0);
+                        }
                     }
                 }
             }
         }
         progress((tw * th) as u64);
-        (x0, y0, film, stats, invalid)
+        (x0, y0, film, parts, stats, invalid)
     });
     let mut film = Film::new(w, h);
+    let mut parts = split.then(|| [Film::new(w, h), Film::new(w, h)]);
     let mut stats = Stats::default();
     let mut invalid = 0;
-    for (x0, y0, tile, s, inv) in &results {
+    for (x0, y0, tile, tile_parts, s, inv) in &results {
         film.merge_tile(tile, *x0, *y0);
+        if let (Some(p), Some(t)) = (parts.as_mut(), tile_parts) {
+            p[0].merge_tile(&t[0], *x0, *y0);
+            p[1].merge_tile(&t[1], *x0, *y0);
+        }
         stats += *s;
         invalid += inv;
     }
+    let light = parts.map(|[d, i]| LightSplit {
+        direct: d.pixels(),
+        indirect: i.pixels(),
+    });
+    // With a split, the beauty is defined as direct + indirect (equal to the film's mean
+    // up to rounding), so that the two add up to it exactly.
+    let pixels = match &light {
+        Some(l) => l
+            .direct
+            .iter()
+            .zip(&l.indirect)
+            .map(|(d, i)| *d + *i)
+            .collect(),
+        None => film.pixels(),
+    };
     RenderedFrame {
         width: w,
         height: h,
-        pixels: film.pixels(),
+        pixels,
         variance: film.variance_of_mean(),
         stats,
         invalid_samples: invalid,
         report: Report::new(),
+        light,
     }
 }
 
@@ -310,5 +388,6 @@ pub(crate) fn splatting<E: SplattingEstimator>(
         stats,
         invalid_samples: invalid,
         report: Report::new(),
+        light: None,
     }
 }

@@ -162,6 +162,10 @@ impl<I: ShutterIntegrator> SequenceRenderer for MotionBlur<I> {
                 .collect();
         self.integrator.render_shutter(&scenes, frame, progress)
     }
+
+    fn separates_light(&self) -> bool {
+        self.integrator.separates_light()
+    }
 }
 
 /// [`render_camera_rays`](crate::integrator::render_camera_rays) over a shutter: sample `s` of a pixel takes a time dimension

@@ -56,16 +56,32 @@ impl PathTracer {
     }
 }
 
-impl RadianceEstimator for PathTracer {
-    fn li(
+impl PathTracer {
+    /// One path sample. Every contribution goes to `l[0]` unless `split`, in which case
+    /// direct light goes to `l[0]` and indirect light to `l[1]` ([`LightSplit`]'s
+    /// convention: direct = emission reached from the camera through delta bounces only,
+    /// plus light arriving straight from an emitter at the first non-delta vertex, by
+    /// its light sample or by its BSDF-sampled ray, MIS-weighted). Without `split` the
+    /// contributions are summed in the same order as before there was a split.
+    ///
+    /// [`LightSplit`]: crate::integrator::LightSplit
+    fn trace(
         &self,
         scene: &FrameScene,
         camera_ray: &Ray,
         sampler: &mut PixelSampler,
         stats: &mut Stats,
-    ) -> Rgb {
+        split: bool,
+    ) -> [Rgb; 2] {
         let max_depth = self.settings.max_depth.unwrap_or(DEPTH_CAP).min(DEPTH_CAP);
-        let mut l = Rgb::ZERO;
+        let mut l = [Rgb::ZERO; 2];
+        // Non-delta scattering vertices so far (bounces sampled from a non-delta lobe).
+        let mut scattered = 0u32;
+        // Where emission found now, and the light sample of the current vertex, go:
+        // direct (0) with no non-delta vertex before, or with one that was the last bounce.
+        let slot = |scattered: u32, specular_bounce: bool| -> usize {
+            usize::from(split && !(scattered == 0 || (scattered == 1 && !specular_bounce)))
+        };
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
         // Segments of the current ray from the camera (the camera ray is segment 1).
@@ -82,7 +98,7 @@ impl RadianceEstimator for PathTracer {
                 if let (Some(env), Some(ei)) = (scene.environment, scene.environment_light) {
                     if depth == 1 {
                         // The camera ray itself: the backdrop (no other strategy sees it).
-                        l += beta * env.background;
+                        l[0] += beta * env.background;
                     } else {
                         let w = if specular_bounce {
                             1.0
@@ -91,7 +107,7 @@ impl RadianceEstimator for PathTracer {
                                 * scene.lights[ei].pdf_li(prev_p, prev_p + ray.d);
                             power_heuristic(1.0, prev_pdf, 1.0, pl)
                         };
-                        l += beta * env.radiance(ray.d) * w;
+                        l[slot(scattered, specular_bounce)] += beta * env.radiance(ray.d) * w;
                     }
                 }
                 break;
@@ -114,7 +130,7 @@ impl RadianceEstimator for PathTracer {
                         None => 1.0,
                     }
                 };
-                l += beta * le * w;
+                l[slot(scattered, specular_bounce)] += beta * le * w;
             }
             if depth >= max_depth {
                 break;
@@ -128,7 +144,8 @@ impl RadianceEstimator for PathTracer {
             let u_light = sampler.next_1d();
             let u_lp = sampler.next_2d();
             if bsdf.has_non_delta() {
-                l += next_event(
+                // The light sample of this vertex: direct at the first non-delta vertex.
+                l[usize::from(split && scattered > 0)] += next_event(
                     scene,
                     &si,
                     wo,
@@ -152,6 +169,9 @@ impl RadianceEstimator for PathTracer {
             }
             beta *= bs.weight;
             specular_bounce = bs.is_delta;
+            if !bs.is_delta {
+                scattered += 1;
+            }
             prev_pdf = bs.pdf;
             prev_p = si.p;
             if bs.is_transmission {
@@ -173,6 +193,32 @@ impl RadianceEstimator for PathTracer {
     }
 }
 
+impl RadianceEstimator for PathTracer {
+    fn li(
+        &self,
+        scene: &FrameScene,
+        camera_ray: &Ray,
+        sampler: &mut PixelSampler,
+        stats: &mut Stats,
+    ) -> Rgb {
+        self.trace(scene, camera_ray, sampler, stats, false)[0]
+    }
+
+    fn separates_light(&self) -> bool {
+        true
+    }
+
+    fn li_split(
+        &self,
+        scene: &FrameScene,
+        camera_ray: &Ray,
+        sampler: &mut PixelSampler,
+        stats: &mut Stats,
+    ) -> [Rgb; 2] {
+        self.trace(scene, camera_ray, sampler, stats, true)
+    }
+}
+
 impl Integrator for PathTracer {
     fn render(
         &self,
@@ -188,6 +234,10 @@ impl Integrator for PathTracer {
             self.settings.seed,
             progress,
         )
+    }
+
+    fn separates_light(&self) -> bool {
+        true
     }
 
     fn batch(&self, spp: u32, round: u32, half: u32) -> Option<Box<dyn Integrator + Send>> {

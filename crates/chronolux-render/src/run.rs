@@ -33,7 +33,8 @@ pub struct FinishedFrame<'a> {
     /// Position in the run: `k` of `n` frames.
     pub k: usize,
     pub n: usize,
-    /// The render passes asked for in [`RunOptions::passes`] (`None` when none were).
+    /// The geometric render passes asked for in [`RunOptions::passes`] (`None` when none
+    /// were); direct and indirect light travel in [`RenderedFrame::light`].
     pub aovs: Option<&'a Aovs>,
 }
 
@@ -230,7 +231,7 @@ fn drive(
             }
         };
         let wall_s = start.elapsed().as_secs_f64();
-        let aovs = options.passes.any().then(|| {
+        let aovs = options.passes.geometric().then(|| {
             // Neighbours for motion: the frames before and after on the timeline.
             let motion = options.passes.motion;
             let prev = (motion && f > 0).then(|| source.frame(f - 1));

@@ -45,6 +45,12 @@ pub trait SequenceRenderer {
         let _ = plan;
         single_pass(self.render_frame(source, frame, progress), on_pass)
     }
+
+    /// Whether its frames carry direct and indirect light separately
+    /// ([`RenderedFrame::light`]; the passes `direct`, `indirect`). False by default.
+    fn separates_light(&self) -> bool {
+        false
+    }
 }
 
 /// A whole frame handed over as the one refinement of a technique that cannot refine.
@@ -139,6 +145,10 @@ impl<I: Integrator> SequenceRenderer for FrameByFrame<I> {
         self.integrator.render(&scene, frame, progress)
     }
 
+    fn separates_light(&self) -> bool {
+        self.integrator.separates_light()
+    }
+
     /// Passes of the **paired-doubling** schedule when the integrator can be re-batched
     /// ([`Integrator::batch`]): passes come in pairs (A, B) of equal sample count, pair 0
     /// with `first_spp / 2` each (at least 1), every later pair with as many as each half
@@ -162,6 +172,8 @@ impl<I: Integrator> SequenceRenderer for FrameByFrame<I> {
         let mut n_half = 0u32;
         let mut acc: Option<RenderedFrame> = None;
         let mut sum: Vec<Rgb> = Vec::new();
+        // Direct and indirect sums, while every pass has them.
+        let mut light_sum: Option<[Vec<Rgb>; 2]> = None;
         let mut index = 0u32;
         'rounds: for round in 0.. {
             for half in 0..2 {
@@ -176,6 +188,22 @@ impl<I: Integrator> SequenceRenderer for FrameByFrame<I> {
                 for (s, p) in sum.iter_mut().zip(&out.pixels) {
                     *s += *p * batch as f32;
                 }
+                light_sum = match (index, light_sum.take(), &out.light) {
+                    (0, _, Some(l)) => Some([
+                        l.direct.iter().map(|p| *p * batch as f32).collect(),
+                        l.indirect.iter().map(|p| *p * batch as f32).collect(),
+                    ]),
+                    (_, Some(mut acc), Some(l)) => {
+                        for (a, p) in acc[0].iter_mut().zip(&l.direct) {
+                            *a += *p * batch as f32;
+                        }
+                        for (a, p) in acc[1].iter_mut().zip(&l.indirect) {
+                            *a += *p * batch as f32;
+                        }
+                        Some(acc)
+                    }
+                    _ => None,
+                };
                 let total = 2 * n_half + (half + 1) * batch;
                 let flow = on_pass(&Pass {
                     index,
@@ -206,7 +234,20 @@ impl<I: Integrator> SequenceRenderer for FrameByFrame<I> {
         }
         let mut out = acc.expect("at least one pass");
         let inv = 1.0 / (2 * n_half) as f32;
-        out.pixels = sum.iter().map(|s| *s * inv).collect();
+        out.light = light_sum.map(|[d, i]| crate::integrator::LightSplit {
+            direct: d.iter().map(|s| *s * inv).collect(),
+            indirect: i.iter().map(|s| *s * inv).collect(),
+        });
+        out.pixels = match &out.light {
+            // The beauty is their sum, as in one pass.
+            Some(l) => l
+                .direct
+                .iter()
+                .zip(&l.indirect)
+                .map(|(d, i)| *d + *i)
+                .collect(),
+            None => sum.iter().map(|s| *s * inv).collect(),
+        };
         // The per-pass variances are not combined (passes of different sizes): the
         // consumer of independent passes estimates the error from their spread.
         out.variance = vec![Rgb::ZERO; out.pixels.len()];

@@ -157,7 +157,10 @@ pub struct RenderArgs {
     /// `albedo` (ViewLayer.Denoising Albedo), `normal` (ViewLayer.Denoising Normal, world
     /// space), `depth` (ViewLayer.Depth, distance along the camera ray), `motion`
     /// (ViewLayer.Vector: X,Y towards the previous frame, Z,W towards the next, in pixels,
-    /// +y down); presets `denoise` (albedo, normal) and `all`. The same for every method.
+    /// +y down), and where the method separates them `direct` and `indirect` light
+    /// (ViewLayer.Direct, ViewLayer.Indirect: they add up to the beauty; an error for a
+    /// method that does not); presets `denoise` (albedo, normal), `light` (direct,
+    /// indirect) and `all` (every pass the method can write).
     #[arg(long, value_name = "LIST")]
     pub passes: Option<String>,
     /// Denoise each frame with Intel Open Image Denoise (albedo and normal passes as

@@ -104,3 +104,28 @@ pub fn pass_channels(aovs: &Aovs) -> Vec<(String, Vec<f32>)> {
     }
     out
 }
+
+/// The EXR channels of a technique's light split (`ViewLayer.Direct.{R,G,B}`,
+/// `ViewLayer.Indirect.{R,G,B}`; they add up to the beauty, see
+/// [`chronolux_render::integrator::LightSplit`]).
+pub fn light_channels(
+    light: &chronolux_render::integrator::LightSplit,
+    direct: bool,
+    indirect: bool,
+) -> Vec<(String, Vec<f32>)> {
+    let mut out = Vec::new();
+    for (keep, pass, img) in [
+        (direct, "Direct", &light.direct),
+        (indirect, "Indirect", &light.indirect),
+    ] {
+        if keep {
+            for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                out.push((
+                    format!("ViewLayer.{pass}.{name}"),
+                    img.iter().map(|p| p[c]).collect(),
+                ));
+            }
+        }
+    }
+    out
+}

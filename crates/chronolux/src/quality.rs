@@ -20,8 +20,9 @@ use chronolux_core::metrics::{self, flip};
 use chronolux_core::scene::frame::FrameBuilder;
 use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::read_exr;
+use chronolux_render::aov::PassSet;
 use chronolux_render::registry::{self, BuildContext, Technique};
-use chronolux_render::run::MemorySink;
+use chronolux_render::run::{FinishedFrame, FrameSink, RunOptions};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -90,9 +91,37 @@ pub struct QualityArgs {
     /// Write a Markdown report (tables of every effort level) to this file.
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,
+    /// Denoise every frame of every method with Open Image Denoise before scoring it
+    /// (as `render --denoise`: the RT filter with the albedo and normal passes, which the
+    /// run makes). The passes and the denoiser run inside the timed run, so their CPU
+    /// seconds are counted. Needs a build with the `oidn` feature.
+    #[arg(long)]
+    pub denoise: bool,
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
+}
+
+/// Keeps each frame's image, denoised first when asked. The denoising happens in
+/// [`FrameSink::frame`], inside the run loop's timing (its CPU seconds are the run's).
+struct ScoredSink {
+    denoise: bool,
+    frames: Vec<(u32, Vec<chronolux_core::color::Rgb>)>,
+}
+
+impl FrameSink for ScoredSink {
+    fn frame(&mut self, f: &FinishedFrame) -> Result<(), chronolux_render::run::SinkError> {
+        let pixels = if self.denoise {
+            let aovs = f
+                .aovs
+                .ok_or("bench quality --denoise: the run made no albedo/normal passes")?;
+            crate::denoise::denoise(&f.output.pixels, aovs)?
+        } else {
+            f.output.pixels.clone()
+        };
+        self.frames.push((f.frame, pixels));
+        Ok(())
+    }
 }
 
 /// One complete render of the sequence at one effort.
@@ -168,6 +197,8 @@ pub struct QualityResult {
     pub method: String,
     pub baseline: Option<String>,
     pub criterion: String,
+    /// Whether every frame was denoised (Open Image Denoise) before scoring.
+    pub denoise: bool,
     /// Frames rendered at each level.
     pub frames: Vec<u32>,
     /// Frames scored (`--measure`; all rendered frames by default); flicker is over
@@ -268,6 +299,11 @@ pub fn run(args: QualityArgs) -> Result<()> {
     if args.target_flip.iter().any(|t| !(*t > 0.0 && *t < 1.0)) {
         bail!("--target-flip values must lie in (0, 1)");
     }
+    if args.denoise
+        && let Some(why) = crate::denoise::unavailable()
+    {
+        bail!("{why}");
+    }
     crate::render::set_threads(args.threads)?;
     crate::render::check_fps_and_depth(args.fps, args.max_depth)?;
     let frames = parse_frames(&args.frames)?;
@@ -331,21 +367,34 @@ pub fn run(args: QualityArgs) -> Result<()> {
             let builder =
                 FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
             let mut source = FrameSource::new(builder, args.fps, frames.clone());
-            let mut sink = MemorySink::new();
-            let run = chronolux_render::run::run(
+            let mut sink = ScoredSink {
+                denoise: args.denoise,
+                frames: Vec::new(),
+            };
+            // A denoised run makes the albedo and normal passes the denoiser takes.
+            let options = RunOptions {
+                passes: if args.denoise {
+                    PassSet::parse("denoise").expect("preset")
+                } else {
+                    PassSet::default()
+                },
+                seed: args.seed,
+            };
+            let run = chronolux_render::run::run_with(
                 renderer.as_mut(),
                 &mut source,
                 &frames,
                 &mut [&mut sink],
                 None,
+                options,
             )
             .map_err(|e| anyhow::anyhow!("{e}"))?;
             let (wall_s, cpu_s) = (run.wall_s, run.cpu_s);
             let images: Vec<Vec<chronolux_core::color::Rgb>> = sink
                 .frames
                 .into_iter()
-                .filter(|(f, ..)| measured.contains(f))
-                .map(|(_, img, _)| img.pixels)
+                .filter(|(f, _)| measured.contains(f))
+                .map(|(_, px)| px)
                 .collect();
             let flips: Vec<f64> = images
                 .iter()
@@ -440,6 +489,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
         method: args.method.clone(),
         baseline: args.baseline.clone(),
         criterion: args.criterion.clone(),
+        denoise: args.denoise,
         frames: frames.clone(),
         measured: measured.clone(),
         target_flip: first,
@@ -488,11 +538,16 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 pub fn markdown(r: &QualityResult) -> String {
     let mut s = String::new();
     s += &format!(
-        "# Equal-quality benchmark: {}{}\n\nFrames rendered {:?}, measured {:?}, criterion: {} HDR-FLIP over frames.\n\n",
+        "# Equal-quality benchmark: {}{}{}\n\nFrames rendered {:?}, measured {:?}, criterion: {} HDR-FLIP over frames.\n\n",
         r.method,
         r.baseline
             .as_ref()
             .map_or(String::new(), |b| format!(" vs {b}")),
+        if r.denoise {
+            ", every frame denoised (OIDN)"
+        } else {
+            ""
+        },
         r.frames,
         r.measured,
         r.criterion

@@ -194,7 +194,12 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
     }
     let settings = technique_settings(tech, base.as_ref(), &flags, args.photons.as_deref(), &sets)?;
     // Built once here so that a bad combination fails before the scene is loaded.
-    tech.build(&settings, &BuildContext { shutter })
+    let built = tech
+        .build(&settings, &BuildContext { shutter })
+        .map_err(anyhow::Error::msg)?;
+    // Direct/indirect asked of a method that does not separate them: said now.
+    passes
+        .resolve(&method, built.separates_light())
         .map_err(anyhow::Error::msg)?;
     let requested_frames = match args.frames.as_deref() {
         Some(f) => Some(parse_frames(f)?),
@@ -332,13 +337,17 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         manifest.merge_earlier(&earlier);
     }
 
+    // Direct and indirect where the method separates them (`all`), an error where they
+    // were named and it does not.
+    let asked = config
+        .passes
+        .resolve(&config.method, renderer.separates_light())
+        .map_err(anyhow::Error::msg)?;
     // A denoised frame needs its albedo and normal.
     let passes = if config.denoise {
-        config
-            .passes
-            .with(PassSet::parse("denoise").expect("preset"))
+        asked.with(PassSet::parse("denoise").expect("preset"))
     } else {
-        config.passes
+        asked
     };
     let options = run::RunOptions {
         passes,
@@ -362,7 +371,7 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         view: config.view,
         resume: exec.resume,
         denoise: config.denoise,
-        keep_passes: config.passes,
+        keep_passes: asked,
         owned: exec.segment.as_ref().map(|s| s.owned.clone()),
         warm_up_until: exec
             .segment
@@ -449,12 +458,23 @@ impl run::FrameSink for DiskSink<'_> {
             height: out.height,
             pixels: out.pixels.clone(),
         };
-        match f.aovs {
-            None => self
-                .sink
+        let light = if self.keep_passes.direct || self.keep_passes.indirect {
+            Some(out.light.as_ref().ok_or_else(|| {
+                format!(
+                    "frame {}: the method made no direct/indirect split",
+                    f.frame
+                )
+            })?)
+        } else {
+            None
+        };
+        if f.aovs.is_none() && light.is_none() {
+            self.sink
                 .write_frame_view(f.frame, &image, self.exposure, self.view)
-                .map_err(|e| format!("writing frame {}: {e}", f.frame))?,
-            Some(aovs) => {
+                .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+        } else {
+            let mut layers = Vec::new();
+            if let Some(aovs) = f.aovs {
                 let mut kept = aovs.clone();
                 if !self.keep_passes.albedo {
                     kept.albedo.clear();
@@ -462,28 +482,38 @@ impl run::FrameSink for DiskSink<'_> {
                 if !self.keep_passes.normal {
                     kept.normal.clear();
                 }
-                let mut layers = crate::denoise::pass_channels(&kept);
-                if self.denoise {
-                    let clean = crate::denoise::denoise(&image.pixels, aovs)
-                        .map_err(|e| format!("frame {}: {e}", f.frame))?;
-                    for (c, name) in ["R", "G", "B"].iter().enumerate() {
-                        layers.push((
-                            format!("ViewLayer.Noisy Image.{name}"),
-                            image.pixels.iter().map(|p| p[c]).collect(),
-                        ));
-                    }
-                    image.pixels = clean;
-                }
-                chronolux_io::image::write_exr_layers(self.sink.exr_path(f.frame), &image, &layers)
-                    .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
-                chronolux_io::image::write_png_view(
-                    self.sink.png_path(f.frame),
-                    &image,
-                    self.exposure,
-                    self.view,
-                )
-                .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+                layers = crate::denoise::pass_channels(&kept);
             }
+            if let Some(l) = light {
+                layers.extend(crate::denoise::light_channels(
+                    l,
+                    self.keep_passes.direct,
+                    self.keep_passes.indirect,
+                ));
+            }
+            if self.denoise {
+                let aovs = f.aovs.ok_or_else(|| {
+                    format!("frame {}: no albedo/normal to denoise with", f.frame)
+                })?;
+                let clean = crate::denoise::denoise(&image.pixels, aovs)
+                    .map_err(|e| format!("frame {}: {e}", f.frame))?;
+                for (c, name) in ["R", "G", "B"].iter().enumerate() {
+                    layers.push((
+                        format!("ViewLayer.Noisy Image.{name}"),
+                        image.pixels.iter().map(|p| p[c]).collect(),
+                    ));
+                }
+                image.pixels = clean;
+            }
+            chronolux_io::image::write_exr_layers(self.sink.exr_path(f.frame), &image, &layers)
+                .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
+            chronolux_io::image::write_png_view(
+                self.sink.png_path(f.frame),
+                &image,
+                self.exposure,
+                self.view,
+            )
+            .map_err(|e| format!("writing frame {}: {e}", f.frame))?;
         }
         self.manifest
             .upsert_frame(FrameRecord::new(f.frame, f.time_s, f.wall_s, f.record()));

@@ -275,6 +275,11 @@ impl crate::sequence::SequenceRenderer for DeptSequence {
             .insert("photons".into(), solved.photons.photons().into());
         out
     }
+
+    /// Direct light per pixel, indirect from the elements ([`view`]).
+    fn separates_light(&self) -> bool {
+        true
+    }
 }
 
 impl Integrator for Dept {
@@ -286,6 +291,10 @@ impl Integrator for Dept {
     ) -> RenderedFrame {
         let solved = self.solve(scene, frame);
         self.render_solved(scene, frame, &solved, progress)
+    }
+
+    fn separates_light(&self) -> bool {
+        true
     }
 }
 

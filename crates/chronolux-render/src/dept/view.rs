@@ -41,15 +41,21 @@ pub struct DeptView<'a> {
     pub max_specular_depth: u32,
 }
 
-impl RadianceEstimator for DeptView<'_> {
-    fn li(
+impl DeptView<'_> {
+    /// One camera sample as `[direct, indirect]` when `split` (everything in `[0]`
+    /// otherwise, summed in the original order): direct = emission seen through delta
+    /// bounces and the light sample at the first non-delta surface; indirect = the
+    /// elements' term there (photons that bounced at least once, and caustic photons).
+    fn trace(
         &self,
         scene: &FrameScene,
         camera_ray: &Ray,
         sampler: &mut PixelSampler,
         stats: &mut Stats,
-    ) -> Rgb {
-        let mut l = Rgb::ZERO;
+        split: bool,
+    ) -> [Rgb; 2] {
+        let mut l = [Rgb::ZERO; 2];
+        let indirect = usize::from(split);
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
         for bounce in 0..=self.max_specular_depth {
@@ -57,7 +63,7 @@ impl RadianceEstimator for DeptView<'_> {
             let Some(hit) = scene.intersect(&ray) else {
                 if let Some(env) = scene.environment {
                     // The camera ray itself shows the backdrop.
-                    l += beta
+                    l[0] += beta
                         * if bounce == 0 {
                             env.background
                         } else {
@@ -68,7 +74,7 @@ impl RadianceEstimator for DeptView<'_> {
             };
             let si = scene.interaction(&hit, &ray);
             let wo = -ray.d.normalize();
-            l += beta * scene.emitted(&si, wo);
+            l[0] += beta * scene.emitted(&si, wo);
             let mat = &scene.materials[si.material as usize];
             let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
             let u_light = sampler.next_1d();
@@ -77,7 +83,7 @@ impl RadianceEstimator for DeptView<'_> {
             let u_dir = sampler.next_2d();
             let diffuse = bsdf.has_non_delta();
             if diffuse {
-                l += next_event(
+                l[0] += next_event(
                     scene,
                     &si,
                     wo,
@@ -97,7 +103,7 @@ impl RadianceEstimator for DeptView<'_> {
                 let front = wo.dot(si.ng) >= 0.0;
                 let e =
                     self.indirect.irradiance(&loc, front) + self.caustic.irradiance(&loc, front);
-                l += beta * bs.weight * e * FRAC_1_PI;
+                l[indirect] += beta * bs.weight * e * FRAC_1_PI;
                 break;
             }
             beta *= bs.weight;
@@ -107,5 +113,31 @@ impl RadianceEstimator for DeptView<'_> {
             ray = spawn_ray(si.p, si.ng, bs.wi);
         }
         l
+    }
+}
+
+impl RadianceEstimator for DeptView<'_> {
+    fn li(
+        &self,
+        scene: &FrameScene,
+        camera_ray: &Ray,
+        sampler: &mut PixelSampler,
+        stats: &mut Stats,
+    ) -> Rgb {
+        self.trace(scene, camera_ray, sampler, stats, false)[0]
+    }
+
+    fn separates_light(&self) -> bool {
+        true
+    }
+
+    fn li_split(
+        &self,
+        scene: &FrameScene,
+        camera_ray: &Ray,
+        sampler: &mut PixelSampler,
+        stats: &mut Stats,
+    ) -> [Rgb; 2] {
+        self.trace(scene, camera_ray, sampler, stats, true)
     }
 }

@@ -517,6 +517,11 @@ impl SequenceRenderer for SpacetimeDept {
         "spacetime-dept"
     }
 
+    /// Direct light per pixel, indirect from the pooled elements (the DEPT view).
+    fn separates_light(&self) -> bool {
+        true
+    }
+
     fn render_frame(
         &mut self,
         source: &mut FrameSource,

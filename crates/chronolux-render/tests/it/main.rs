@@ -9,6 +9,7 @@ mod dept;
 mod determinism;
 mod furnace;
 mod icsel;
+mod light;
 mod matrix;
 mod multi_frame;
 mod peer;

@@ -57,12 +57,205 @@ fn passes_are_layers_of_the_exr_for_any_method() {
     );
 }
 
+/// `direct` and `indirect` are layers that add up to the beauty exactly (f32 EXR);
+/// a method that does not separate them refuses them before rendering.
+#[test]
+fn direct_and_indirect_add_up_to_the_beauty_and_are_refused_where_not_separated() {
+    let dir = temp_dir("passes-light");
+    ok(&run([
+        "render",
+        "--method",
+        "path",
+        "--passes",
+        "light,depth",
+        "--frames",
+        "4",
+        "--resolution",
+        "16x16",
+        "--spp",
+        "2",
+        "--output",
+        dir.to_str().unwrap(),
+        "--no-preview",
+    ]));
+    let exr = dir.join("frame_0004.exr");
+    let beauty = read_exr(&exr).unwrap().pixels;
+    let ch = |n: &str| read_exr_channel(&exr, n).unwrap().unwrap();
+    let mut indirect_sum = 0.0f64;
+    for (c, name) in ["R", "G", "B"].iter().enumerate() {
+        let d = ch(&format!("ViewLayer.Direct.{name}"));
+        let i = ch(&format!("ViewLayer.Indirect.{name}"));
+        for k in 0..beauty.len() {
+            assert_eq!(d[k] + i[k], beauty[k][c], "pixel {k} channel {name}");
+            indirect_sum += i[k] as f64;
+        }
+    }
+    // The demo is a closed room: its walls light each other.
+    assert!(indirect_sum > 0.0);
+    // A method that does not separate them: an error naming it, before any frame.
+    let dir = temp_dir("passes-light-bad");
+    fails(
+        &run([
+            "render",
+            "--method",
+            "stbpt",
+            "--passes",
+            "direct",
+            "--frames",
+            "4",
+            "--output",
+            dir.to_str().unwrap(),
+        ]),
+        &["stbpt", "does not separate direct and indirect"],
+    );
+    assert!(!dir.join("frame_0004.exr").exists());
+    // `all` writes them where the method separates them, and not where it does not.
+    for (method, has) in [("path", true), ("stbpt", false)] {
+        let dir = temp_dir(&format!("passes-all-{method}"));
+        ok(&run([
+            "render",
+            "--method",
+            method,
+            "--passes",
+            "all",
+            "--frames",
+            "4",
+            "--resolution",
+            "8x8",
+            "--spp",
+            "1",
+            "--output",
+            dir.to_str().unwrap(),
+            "--no-preview",
+        ]));
+        let c = read_exr_channel(dir.join("frame_0004.exr"), "ViewLayer.Direct.G").unwrap();
+        assert_eq!(c.is_some(), has, "{method}");
+    }
+}
+
+/// Interpreter named by `CHRONOLUX_OPENEXR_PYTHON` (default `python3`) if it can
+/// `import OpenEXR, numpy`, under the policy of `chronolux_core::testing::external`
+/// otherwise (`.ci/run` installs both into `.venv-flip` and sets the variable).
+fn openexr_python() -> Option<String> {
+    let var = "CHRONOLUX_OPENEXR_PYTHON";
+    let py = std::env::var(var).unwrap_or_else(|_| "python3".into());
+    let found = std::process::Command::new(&py)
+        .args(["-c", "import OpenEXR, numpy"])
+        .output()
+        .is_ok_and(|o| o.status.success())
+        .then(|| py.clone());
+    chronolux_core::testing::external::require_external(
+        found,
+        &format!("the Python package OpenEXR (`{py} -c \"import OpenEXR, numpy\"` fails)"),
+        "`.ci/run` installs it with `.venv-flip/bin/pip install OpenEXR numpy` and sets \
+         CHRONOLUX_OPENEXR_PYTHON=.venv-flip/bin/python; do the same by hand",
+    )
+}
+
+/// An independent reader (the OpenEXR Python package, the reference implementation's
+/// bindings) sees every layer under Blender's names, with the values our reader sees,
+/// and direct + indirect equal to the beauty.
+#[test]
+fn an_independent_reader_sees_the_passes() {
+    let Some(py) = openexr_python() else { return };
+    let dir = temp_dir("passes-openexr");
+    ok(&run([
+        "render",
+        "--method",
+        "path",
+        "--passes",
+        "all",
+        "--frames",
+        "3..5",
+        "--resolution",
+        "12x10",
+        "--spp",
+        "2",
+        "--output",
+        dir.to_str().unwrap(),
+        "--no-preview",
+    ]));
+    let exr = dir.join("frame_0004.exr");
+    let script = r#"
+import json, sys, OpenEXR, numpy as np
+f = OpenEXR.File(sys.argv[1], separate_channels=True)
+ch = {k: v.pixels for k, v in f.channels().items()}
+out = {k: [float(x) for x in v.astype(np.float64).ravel()] for k, v in ch.items()}
+out["shape"] = list(ch["R"].shape)
+out["adds_up"] = all(bool(np.array_equal(ch["ViewLayer.Direct." + c] + ch["ViewLayer.Indirect." + c], ch[c])) for c in "RGB")
+print(json.dumps(out))
+"#;
+    let o = std::process::Command::new(&py)
+        .args(["-c", script, exr.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["shape"], serde_json::json!([10, 12]));
+    assert_eq!(v["adds_up"], true);
+    let names = [
+        "R",
+        "G",
+        "B",
+        "ViewLayer.Denoising Albedo.R",
+        "ViewLayer.Denoising Albedo.G",
+        "ViewLayer.Denoising Albedo.B",
+        "ViewLayer.Denoising Normal.X",
+        "ViewLayer.Denoising Normal.Y",
+        "ViewLayer.Denoising Normal.Z",
+        "ViewLayer.Depth.Z",
+        "ViewLayer.Vector.X",
+        "ViewLayer.Vector.Y",
+        "ViewLayer.Vector.Z",
+        "ViewLayer.Vector.W",
+        "ViewLayer.Direct.R",
+        "ViewLayer.Direct.G",
+        "ViewLayer.Direct.B",
+        "ViewLayer.Indirect.R",
+        "ViewLayer.Indirect.G",
+        "ViewLayer.Indirect.B",
+    ];
+    let obj = v.as_object().unwrap();
+    assert_eq!(
+        obj.len(),
+        names.len() + 2,
+        "{:?}",
+        obj.keys().collect::<Vec<_>>()
+    );
+    for name in names {
+        let theirs: Vec<f32> = obj[name]
+            .as_array()
+            .unwrap_or_else(|| panic!("{name} missing"))
+            .iter()
+            .map(|x| x.as_f64().unwrap() as f32)
+            .collect();
+        let ours = read_exr_channel(&exr, name).unwrap().unwrap();
+        // f32 samples, printed as f64 and parsed back: exact.
+        assert_eq!(theirs, ours, "{name}");
+    }
+}
+
 #[cfg(not(feature = "oidn"))]
 #[test]
 fn denoise_without_the_feature_is_a_clear_error() {
     let dir = temp_dir("denoise-off");
     fails(
         &run(["render", "--denoise", "--output", dir.to_str().unwrap()]),
+        &["--denoise", "--features oidn"],
+    );
+    // The same for the equal-quality benchmark, before any reference is read.
+    fails(
+        &run([
+            "bench",
+            "quality",
+            "--frames",
+            "0..2",
+            "--reference",
+            dir.to_str().unwrap(),
+            "--target-flip",
+            "0.1",
+            "--denoise",
+        ]),
         &["--denoise", "--features oidn"],
     );
 }

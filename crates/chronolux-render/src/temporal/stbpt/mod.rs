@@ -392,6 +392,8 @@ impl SequenceRenderer for Stbpt {
             )]
             .into_iter()
             .collect(),
+            // The reused subpaths are not split into direct and indirect light.
+            light: None,
         }
     }
 }

@@ -384,8 +384,8 @@ impl SplattingEstimator for Bdpt {
             let mut l = Rgb::ZERO;
             for t in 1..=camera.len() {
                 for s_ in 0..=light.len() {
-                    if (s_ == 1 && t == 1)
-                        || (t == 1 && !self.settings.light_tracing)
+                    // t = 1 is light tracing: never with s = 1, and only when enabled.
+                    if (t == 1 && (s_ == 1 || !self.settings.light_tracing))
                         || s_ + t < 2
                         || s_ + t - 1 > max_segments
                     {

@@ -1461,10 +1461,26 @@ fn decode_image(bytes: &[u8]) -> Result<Decoded, String> {
     }
 }
 
+/// Most pixels a texture may have (16384 × 8192; 512 MiB as RGBA8). A header claiming more
+/// is refused before anything is allocated: fuzzing found a 12 kB GLB whose PNG header
+/// claimed 841 TB of pixels, and the allocation aborted the process.
+pub const MAX_TEXTURE_PIXELS: u64 = 1 << 27;
+
+fn check_texture_size(kind: &str, w: u64, h: u64) -> Result<(), String> {
+    if w * h > MAX_TEXTURE_PIXELS {
+        return Err(format!(
+            "{kind}: {w} × {h} pixels is larger than the {MAX_TEXTURE_PIXELS}-pixel texture limit"
+        ));
+    }
+    Ok(())
+}
+
 fn decode_png(bytes: &[u8]) -> Result<Decoded, String> {
     let mut dec = png::Decoder::new(std::io::Cursor::new(bytes));
     dec.set_transformations(png::Transformations::normalize_to_color8());
     let mut reader = dec.read_info().map_err(|e| format!("PNG: {e}"))?;
+    let header = reader.info();
+    check_texture_size("PNG", header.width as u64, header.height as u64)?;
     let size = reader.output_buffer_size().ok_or("PNG: image too large")?;
     let mut buf = vec![0u8; size];
     let info = reader
@@ -1507,6 +1523,9 @@ fn decode_jpeg(bytes: &[u8]) -> Result<Decoded, String> {
         zune_jpeg::zune_core::bytestream::ZCursor::new(bytes),
         opts,
     );
+    dec.decode_headers().map_err(|e| format!("JPEG: {e:?}"))?;
+    let (w, h) = dec.dimensions().ok_or("JPEG: no dimensions")?;
+    check_texture_size("JPEG", w as u64, h as u64)?;
     let data = dec.decode().map_err(|e| format!("JPEG: {e:?}"))?;
     let (w, h) = dec.dimensions().ok_or("JPEG: no dimensions")?;
     let out: Vec<[u8; 4]> = data

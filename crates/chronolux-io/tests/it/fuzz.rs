@@ -298,11 +298,29 @@ fn fuzz_crash_files_load_or_fail_without_panic() {
     let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"));
     // - libfuzzer-crash-bvh-depth.glb: the same assertion, found by libFuzzer (fuzz/) after
     //   13,362 executions.
+    // - libfuzzer-crash-png-huge.glb: EmissiveStrengthTest.glb mutated (libFuzzer, after
+    //   707,669 executions) into a PNG header claiming 841 TB of pixels; the allocation
+    //   aborted the process (not a panic: no catch_unwind could have caught it). Fixed by
+    //   the texture size limit checked from the header.
     for name in [
         "fuzz-rigged-shear-skin.glb",
         "libfuzzer-crash-bvh-depth.glb",
+        "libfuzzer-crash-png-huge.glb",
     ] {
         let bytes = std::fs::read(dir.join(name)).unwrap();
         exercise(&bytes, Some(dir));
     }
+}
+
+#[test]
+fn a_texture_header_claiming_terabytes_is_refused_before_allocating() {
+    // The libFuzzer find above: the PNG header says 841 TB of pixels. The loader must say
+    // so (naming the limit) instead of trying to allocate it.
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"));
+    let bytes = std::fs::read(dir.join("libfuzzer-crash-png-huge.glb")).unwrap();
+    let msg = match load_slice(&bytes, Some(dir), "huge.glb") {
+        Err(e) => e.to_string(),
+        Ok(desc) => desc.warnings.join("\n"),
+    };
+    assert!(msg.contains("texture limit"), "{msg}");
 }

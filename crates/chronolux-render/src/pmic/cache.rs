@@ -307,6 +307,12 @@ impl IrradianceCache {
     /// Calls `f(record, ε)` for every record valid at (x, n) (`ε < a`).
     #[inline]
     pub fn for_valid(&self, x: Vec3, n: Vec3, mut f: impl FnMut(&Record, f32)) {
+        self.for_valid_indexed(x, n, |_, rec, eps| f(rec, eps));
+    }
+
+    /// [`Self::for_valid`] with each record's index in [`Self::records`].
+    #[inline]
+    pub fn for_valid_indexed(&self, x: Vec3, n: Vec3, mut f: impl FnMut(usize, &Record, f32)) {
         for level in 0..LEVELS {
             if self.levels_used & (1 << level) == 0 {
                 continue;
@@ -319,7 +325,7 @@ impl IrradianceCache {
                 if let Some(eps) = rec.error(x, n)
                     && eps < self.accuracy
                 {
-                    f(rec, eps);
+                    f(id as usize, rec, eps);
                 }
             }
         }

@@ -342,12 +342,12 @@ impl IrradianceCache {
     /// Calls `f(record, ε)` for every record valid at (x, n) (`ε < a`).
     #[inline]
     pub fn for_valid(&self, x: Vec3, n: Vec3, mut f: impl FnMut(&Record, f32)) {
-        self.for_valid_id(x, n, |_, rec, eps| f(rec, eps));
+        self.for_valid_indexed(x, n, |_, rec, eps| f(rec, eps));
     }
 
-    /// [`IrradianceCache::for_valid`] with each record's index (insertion order).
+    /// [`Self::for_valid`] with each record's index in [`Self::records`].
     #[inline]
-    pub fn for_valid_id(&self, x: Vec3, n: Vec3, mut f: impl FnMut(u32, &Record, f32)) {
+    pub fn for_valid_indexed(&self, x: Vec3, n: Vec3, mut f: impl FnMut(usize, &Record, f32)) {
         for level in 0..LEVELS {
             if self.levels_used & (1 << level) == 0 {
                 continue;
@@ -360,7 +360,7 @@ impl IrradianceCache {
                 if let Some(eps) = rec.error(x, n)
                     && eps < self.accuracy
                 {
-                    f(id, rec, eps);
+                    f(id as usize, rec, eps);
                 }
             }
         }

@@ -25,7 +25,7 @@
 //! exact rather than up to rounding, twins are removed before the tree is built.
 
 use chronolux_core::bsdf::{Bsdf, TransportMode};
-use chronolux_core::color::Rgb;
+use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::math::Vec3;
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use std::num::NonZero;
@@ -238,6 +238,52 @@ impl PhotonMap {
             }
         }
         sum / (lookup.filter.norm() * r2)
+    }
+
+    /// Luminance of the (signed) irradiance estimate at `x` and an upper bound of its
+    /// standard deviation: with `w ≤ 1` (both filters), `Var Ê = Σ (Φ_i w_i)² / (norm r²)²
+    /// ≤ Σ Φ_i² w_i / (norm r²)²` for independent photons, luminances `Φ_i`.
+    pub fn irradiance_with_noise(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        lookup: &Lookup,
+        r_max: f32,
+    ) -> (f32, f32) {
+        let Some(tree) = &self.tree else {
+            return (0.0, 0.0);
+        };
+        let k = NonZero::new(lookup.k.max(1) as usize).expect("k ≥ 1");
+        let found = tree
+            .query(&x.to_array())
+            .nearest_n::<SquaredEuclidean<f32>>(k)
+            .within(r_max * r_max)
+            .execute();
+        if found.is_empty() {
+            return (0.0, 0.0);
+        }
+        let r2 = if found.len() >= k.get() {
+            found
+                .iter()
+                .map(|f| f.distance)
+                .fold(0.0f32, f32::max)
+                .max(1e-12)
+        } else {
+            r_max * r_max
+        };
+        let (mut sum, mut sq) = (0.0f32, 0.0f32);
+        for f in &found {
+            let ph = &self.photons[f.item as usize];
+            if ph.wi.dot(n) <= 0.0 || ph.n.dot(n) < 0.5 {
+                continue;
+            }
+            let w = lookup.filter.weight(f.distance, r2);
+            let l = luminance(ph.flux);
+            sum += l * w;
+            sq += l * l * w;
+        }
+        let a = lookup.filter.norm() * r2;
+        (sum / a, sq.sqrt() / a)
     }
 
     /// Irradiance at `x` (side normal `n`).

@@ -539,7 +539,7 @@ impl IcSelective {
             let hits = parallel::map_chunks(points.len(), 256, |range| {
                 let mut ids = Vec::new();
                 for (_, q) in &points[range] {
-                    old.for_valid_id(q.p, q.n, |id, _, _| ids.push(id));
+                    old.for_valid_indexed(q.p, q.n, |id, _, _| ids.push(id as u32));
                 }
                 ids
             });

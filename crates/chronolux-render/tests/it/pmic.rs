@@ -408,7 +408,8 @@ fn bits(img: &chronolux_render::integrator::RenderedFrame) -> Vec<[u32; 3]> {
 
 /// On a static animation nothing is dynamic: the static photons are `pm-ic`'s photons
 /// (`fixed_photons`), the static cache gets the records `pm-ic` makes, the dynamic map is
-/// empty and the blend weight 0 — every frame is bit-identical to `pm-ic`'s.
+/// empty and the blend weight 0 — every frame is bit-identical to `pm-ic`'s (with the
+/// same treatment of eye samples no record covers, `fallback_accuracy = 0`: a gather).
 #[test]
 fn ic_static_dynamic_equals_pm_ic_on_a_static_animation() {
     let frames = [0, 1, 2];
@@ -419,6 +420,7 @@ fn ic_static_dynamic_equals_pm_ic_on_a_static_animation() {
     let mut b = IcStaticDynamic::new(
         IcStaticDynamicSettings {
             pmic: pmic_settings(),
+            fallback_accuracy: 0.0,
             ..Default::default()
         },
         "ic-static-dynamic",
@@ -508,4 +510,161 @@ fn ic_static_dynamic_is_deterministic_across_thread_counts() {
     for (x, y) in a.iter().zip(&b) {
         assert!(bits(x) == bits(y));
     }
+}
+
+/// Only photons whose static paths cross a dynamic object's bounds in the frame are
+/// re-traced per frame: every other photon's path in the frame is provably its static
+/// path (module doc of `retrace_set`). Checked by re-tracing *every* photon in two frames
+/// of the moving cube: each photon outside the set has exactly its static hits and path
+/// points, for the global and the caustic stream; and the set is not vacuous (some of
+/// its photons change, and it is a small part of all photons).
+#[test]
+fn photons_outside_the_retrace_set_keep_their_static_paths() {
+    use chronolux_core::scene::delta::FrameDelta;
+    use chronolux_render::pmic::caustic_seed;
+    use chronolux_render::pmic::static_dynamic::{
+        Keep, Stream, dynamic_bounds, retrace_set, trace_path,
+    };
+    let n = 20_000u64;
+    let frames = vec![0, 6, 12];
+    let mut src = crate::source(cornell_moving(), 32, 32, 24.0, frames.clone());
+    let scenes: Vec<_> = frames.iter().map(|&f| src.frame(f)).collect();
+    let refs: Vec<&_> = scenes.iter().map(|s| &**s).collect();
+    let dynamic = FrameDelta::over(&refs).dynamic_instances();
+    assert_eq!(dynamic.iter().filter(|d| **d).count(), 1);
+    let stat = scenes[0].without_instances(&dynamic);
+    let all: Vec<u32> = (0..n as u32).collect();
+    for (seed, keep) in [(7u64, Keep::All), (caustic_seed(7), Keep::Caustic)] {
+        let stream = Stream::trace(&stat, n, seed, keep);
+        for scene in &scenes[1..] {
+            let boxes = dynamic_bounds(scene, &dynamic);
+            let set = retrace_set(&stream, &all, &boxes);
+            let mut changed = 0;
+            let mut next = 0;
+            for i in 0..n as u32 {
+                let now = trace_path(scene, i as u64, seed, n, keep);
+                let before = trace_path(&stat, i as u64, seed, n, keep);
+                assert_eq!(before.hits, stream.hits_of(i as usize));
+                if next < set.len() && set[next] == i {
+                    next += 1;
+                    changed += usize::from(now != before);
+                } else {
+                    assert!(now == before, "photon {i} changed outside the set");
+                }
+            }
+            if keep == Keep::All {
+                assert!(
+                    changed > 0 && set.len() < n as usize / 4,
+                    "{changed} / {}",
+                    set.len()
+                );
+            }
+        }
+    }
+}
+
+/// No seam where the dynamic cache takes over. Along every image row, on its longest run
+/// of points on one surface (same instance and normal), the indirect irradiance the eye
+/// pass uses is sampled every quarter pixel together with the blend weight β. At the
+/// places where β leaves 0 the second difference of the profile must not stand out from
+/// the second differences on the same surface where β = 0 (the static cache alone, whose
+/// interpolation has its own texture). If the `3m` values at the `m` boundaries of a
+/// surface were no different from its `n` reference values (exchangeable), the chance
+/// that their largest exceeds the reference's largest is `3m / (n + 3m)`; surfaces with
+/// `n ≥ 57m` make that ≤ 5 %, the false-alarm rate accepted for calling a seam
+/// visible. A switch to the dynamic cache with a step (or a kink) that stands out of the
+/// static texture fails it.
+#[test]
+fn blend_into_the_dynamic_cache_leaves_no_seam() {
+    use chronolux_core::color::luminance;
+    use chronolux_core::math::Vec2;
+    use std::collections::BTreeMap;
+    let (w, h) = (64u32, 64u32);
+    let mut r = IcStaticDynamic::new(
+        IcStaticDynamicSettings {
+            pmic: pmic_settings(),
+            segment: 3,
+            ..Default::default()
+        },
+        "ic-static-dynamic",
+    );
+    let mut src = crate::source(cornell_moving(), w, h, 24.0, vec![0, 6, 12]);
+    let step = 0.25f32;
+    let per_row = (w as f32 / step) as usize;
+    let raster: Vec<Vec2> = (0..h)
+        .flat_map(|y| (0..per_row).map(move |i| Vec2::new(step * (i as f32 + 0.5), y as f32 + 0.5)))
+        .collect();
+    let all = r.profile(&mut src, 6, &raster);
+    // Per instance: (reference |Δ²| values, boundary maxima).
+    let mut pools: BTreeMap<u32, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
+    for prof in all.chunks(per_row) {
+        // Longest run of points on one surface (same instance and normal).
+        let mut best = (0usize, 0usize);
+        let mut start = 0;
+        for i in 1..=prof.len() {
+            let same = i < prof.len()
+                && match (&prof[i - 1], &prof[i]) {
+                    (Some(a), Some(b)) => a.0.instance == b.0.instance && a.0.n.dot(b.0.n) > 0.9999,
+                    _ => false,
+                };
+            if !same {
+                if i - start > best.1 - best.0 && prof[start].is_some() {
+                    best = (start, i);
+                }
+                start = i;
+            }
+        }
+        if best.1 - best.0 < 8 {
+            continue;
+        }
+        let instance = prof[best.0].expect("run of found points").0.instance;
+        let run: Vec<(f32, f64)> = prof[best.0..best.1]
+            .iter()
+            .map(|p| {
+                let (_, beta, e) = p.expect("run of found points");
+                (beta, luminance(e) as f64)
+            })
+            .collect();
+        // |Δ²| centred on run index i (1 ≤ i ≤ len − 2).
+        let d2 = |i: usize| (run[i + 1].1 - 2.0 * run[i].1 + run[i - 1].1).abs();
+        let pool = pools.entry(instance).or_default();
+        for i in 1..run.len() - 1 {
+            if (i - 1..=i + 1).all(|j| run[j].0 == 0.0) {
+                pool.0.push(d2(i));
+            }
+        }
+        // Boundaries: β = 0 on one side, > 0 on the other; the stencils around them.
+        for b in 1..run.len() {
+            if (run[b - 1].0 == 0.0) != (run[b].0 == 0.0) {
+                let at = (b.saturating_sub(1).max(1)..=(b + 1).min(run.len() - 2))
+                    .map(d2)
+                    .fold(0.0, f64::max);
+                pool.1.push(at);
+            }
+        }
+    }
+    let mut checked = 0;
+    for (instance, (reference, bounds)) in &pools {
+        if bounds.is_empty() || reference.len() < 57 * bounds.len() {
+            continue;
+        }
+        let ref_max = reference.iter().cloned().fold(0.0, f64::max);
+        let at = bounds.iter().cloned().fold(0.0, f64::max);
+        eprintln!(
+            "instance {instance}: {} boundaries, largest |Δ²| there {at:.4e}, reference max \
+             {ref_max:.4e} (n = {})",
+            bounds.len(),
+            reference.len()
+        );
+        assert!(at <= ref_max, "instance {instance}: seam: {at} > {ref_max}");
+        checked += 1;
+    }
+    assert!(
+        checked >= 1,
+        "no surface crosses the blend: {:?}",
+        pools
+            .iter()
+            .map(|(k, v)| (k, v.0.len(), v.1.len()))
+            .collect::<Vec<_>>()
+    );
 }

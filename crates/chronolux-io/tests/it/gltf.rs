@@ -744,6 +744,52 @@ fn error_missing_texture() {
 }
 
 #[test]
+fn a_png_header_claiming_terabytes_is_refused_before_allocating() {
+    // libFuzzer found a GLB whose PNG header claimed 841 TB of pixels (the fuzz build
+    // skips the png crate's CRC checks); the allocation aborted the process. Here a valid
+    // PNG whose IHDR (CRC recomputed) says 2^20 × 2^20: refused, naming the limit.
+    let mut png_bytes = Vec::new();
+    {
+        let mut enc = png::Encoder::new(&mut png_bytes, 2, 1);
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        enc.write_header()
+            .unwrap()
+            .write_image_data(&[255, 0, 0, 0, 0, 255])
+            .unwrap();
+    }
+    // Signature (8), IHDR length (4), "IHDR" (4), width, height, …, CRC over type + data.
+    png_bytes[16..20].copy_from_slice(&(1u32 << 20).to_be_bytes());
+    png_bytes[20..24].copy_from_slice(&(1u32 << 20).to_be_bytes());
+    let crc = {
+        let mut c = !0u32;
+        for &b in &png_bytes[12..29] {
+            c ^= b as u32;
+            for _ in 0..8 {
+                c = if c & 1 != 0 {
+                    (c >> 1) ^ 0xEDB8_8320
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
+    };
+    png_bytes[29..33].copy_from_slice(&crc.to_be_bytes());
+    let mut v = tiny(&TRI, &[0, 1, 2]);
+    v["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&png_bytes))}]);
+    v["textures"] = json!([{"source": 0}]);
+    v["materials"] = json!([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}}}]);
+    v["meshes"][0]["primitives"][0]["material"] = json!(0);
+    let e = load_json(&v).unwrap_err();
+    let msg = single_line(&e);
+    assert!(
+        msg.contains("texture limit") && msg.contains("1048576"),
+        "{msg}"
+    );
+}
+
+#[test]
 fn texture_decoded_with_sampler_and_transform() {
     // 2×1 RGB PNG made with the png crate.
     let mut png_bytes = Vec::new();

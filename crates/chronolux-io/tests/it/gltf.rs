@@ -743,21 +743,25 @@ fn error_missing_texture() {
     assert!(load(&p).is_err());
 }
 
+/// A 2×1 RGB PNG (red, blue) made with the png crate.
+fn red_blue_png() -> Vec<u8> {
+    let mut png_bytes = Vec::new();
+    let mut enc = png::Encoder::new(&mut png_bytes, 2, 1);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header()
+        .unwrap()
+        .write_image_data(&[255, 0, 0, 0, 0, 255])
+        .unwrap();
+    png_bytes
+}
+
 #[test]
 fn a_png_header_claiming_terabytes_is_refused_before_allocating() {
     // libFuzzer found a GLB whose PNG header claimed 841 TB of pixels (the fuzz build
     // skips the png crate's CRC checks); the allocation aborted the process. Here a valid
     // PNG whose IHDR (CRC recomputed) says 2^20 × 2^20: refused, naming the limit.
-    let mut png_bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut png_bytes, 2, 1);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        enc.write_header()
-            .unwrap()
-            .write_image_data(&[255, 0, 0, 0, 0, 255])
-            .unwrap();
-    }
+    let mut png_bytes = red_blue_png();
     // Signature (8), IHDR length (4), "IHDR" (4), width, height, …, CRC over type + data.
     png_bytes[16..20].copy_from_slice(&(1u32 << 20).to_be_bytes());
     png_bytes[20..24].copy_from_slice(&(1u32 << 20).to_be_bytes());
@@ -791,17 +795,7 @@ fn a_png_header_claiming_terabytes_is_refused_before_allocating() {
 
 #[test]
 fn texture_decoded_with_sampler_and_transform() {
-    // 2×1 RGB PNG made with the png crate.
-    let mut png_bytes = Vec::new();
-    {
-        let mut enc = png::Encoder::new(&mut png_bytes, 2, 1);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        enc.write_header()
-            .unwrap()
-            .write_image_data(&[255, 0, 0, 0, 0, 255])
-            .unwrap();
-    }
+    let png_bytes = red_blue_png();
     let mut v = tiny(&TRI, &[0, 1, 2]);
     v["extensionsUsed"] = json!(["KHR_texture_transform", "EXT_fancy_thing"]);
     v["images"] = json!([{"uri": format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&png_bytes))}]);

@@ -1,6 +1,7 @@
 //! `ic-selective` (issue 13): the per-direction store, selection by age, no stale hits,
 //! per-stratum agreement with a frame-by-frame gather, no accumulation of error.
 
+use crate::bits;
 use crate::pmic::cornell_moving;
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::math::Frame;
@@ -38,13 +39,6 @@ fn selective(pmic: PmIcSettings, paged: bool) -> IcSelective {
         },
         "ic-selective",
     )
-}
-
-fn bits(img: &RenderedFrame) -> Vec<[u32; 3]> {
-    img.pixels
-        .iter()
-        .map(|p| p.to_array().map(f32::to_bits))
-        .collect()
 }
 
 /// The cube of `cornell_moving` going back and forth: x from −0.3 to 0.1 and back every
@@ -163,7 +157,7 @@ fn paged_and_memory_stores_give_identical_images() {
     let ((a, sa), (b, sb)) = (run(true), run(false));
     for (f, (x, y)) in a.iter().zip(&b).enumerate() {
         assert!(
-            bits(x) == bits(y),
+            bits(&x.pixels) == bits(&y.pixels),
             "frame {f}: paged and memory stores differ"
         );
     }

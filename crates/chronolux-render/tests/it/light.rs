@@ -2,6 +2,7 @@
 //! they add up to the beauty exactly, follow the documented convention, and only the
 //! techniques that separate them write them.
 
+use crate::bits;
 use crate::source;
 use chronolux_core::color::Rgb;
 use chronolux_core::scene::desc::SceneDesc;
@@ -34,10 +35,6 @@ fn frame4_of(desc: SceneDesc, r: &mut dyn SequenceRenderer) -> RenderedFrame {
 /// Frame 4 of the demo (the Cornell stage with its moving block and glossy materials).
 fn frame4(r: &mut dyn SequenceRenderer) -> RenderedFrame {
     frame4_of(chronolux_core::scene::stage::demo(), r)
-}
-
-fn bits(v: &[Rgb]) -> Vec<[u32; 3]> {
-    v.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
 }
 
 fn sum(v: &[Rgb]) -> f64 {

@@ -56,3 +56,9 @@ pub fn mean_and_stderr(px: &[glam::Vec3]) -> (f64, f64) {
     let var = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0);
     (m, (var / n).sqrt())
 }
+
+/// Pixels as bit patterns, for bit-for-bit comparisons (`==` on floats would equate
+/// 0.0 and −0.0 and never NaN).
+pub fn bits(px: &[glam::Vec3]) -> Vec<[u32; 3]> {
+    px.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+}

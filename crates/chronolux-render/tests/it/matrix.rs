@@ -9,6 +9,7 @@
 //! - on the static Cornell box every technique converges to the path tracer's image: each
 //!   channel's image mean within the bias bound stated at [`BIAS_BOUND`].
 
+use crate::bits;
 use crate::source;
 use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::stage;
@@ -51,13 +52,6 @@ fn render(
     sink.frames.into_iter().map(|(_, img, _)| img).collect()
 }
 
-fn bits(img: &RenderedFrame) -> Vec<[u32; 3]> {
-    img.pixels
-        .iter()
-        .map(|p| p.to_array().map(f32::to_bits))
-        .collect()
-}
-
 #[test]
 fn every_technique_is_bit_identical_across_thread_counts() {
     let frames = [0u32, 1];
@@ -81,7 +75,7 @@ fn every_technique_is_bit_identical_across_thread_counts() {
                 t.name()
             );
             assert!(
-                bits(x) == bits(y),
+                bits(&x.pixels) == bits(&y.pixels),
                 "{} frame {}: 1 and 2 threads differ",
                 t.name(),
                 frames[k]

@@ -1,6 +1,7 @@
 //! `pm-ic` and `ic-static-dynamic`: photon-map estimates, irradiance-cache interpolation
 //! and gradients against analytic cases, convergence to the path tracer, determinism.
 
+use crate::bits;
 use crate::frame0;
 use chronolux_core::color::Rgb;
 use chronolux_core::math::Vec3;
@@ -399,13 +400,6 @@ fn sequence(
         .collect()
 }
 
-fn bits(img: &chronolux_render::integrator::RenderedFrame) -> Vec<[u32; 3]> {
-    img.pixels
-        .iter()
-        .map(|p| p.to_array().map(f32::to_bits))
-        .collect()
-}
-
 /// On a static animation nothing is dynamic: the static photons are `pm-ic`'s photons
 /// (`fixed_photons`), the static cache gets the records `pm-ic` makes, the dynamic map is
 /// empty and the blend weight 0 — every frame is bit-identical to `pm-ic`'s (with the
@@ -428,7 +422,7 @@ fn ic_static_dynamic_equals_pm_ic_on_a_static_animation() {
     let ra = sequence(&mut a, cornell_box(), &frames);
     let rb = sequence(&mut b, cornell_box(), &frames);
     for (f, (x, y)) in ra.iter().zip(&rb).enumerate() {
-        assert!(bits(x) == bits(y), "frame {f} differs");
+        assert!(bits(&x.pixels) == bits(&y.pixels), "frame {f} differs");
         assert_eq!(y.report["dynamic_map_photons"], 0);
     }
     // Records are made once: later frames of the segment add none.
@@ -508,7 +502,7 @@ fn ic_static_dynamic_is_deterministic_across_thread_counts() {
     };
     let (a, b) = (render(1), render(2));
     for (x, y) in a.iter().zip(&b) {
-        assert!(bits(x) == bits(y));
+        assert!(bits(&x.pixels) == bits(&y.pixels));
     }
 }
 

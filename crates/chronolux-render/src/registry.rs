@@ -205,6 +205,16 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
     &crate::spt::TECHNIQUE,
 ];
 
+/// The technique `render` uses when no `--method` is given: `stbpt`, the one the
+/// equal-quality benchmarks (BENCHMARKS.md) show ahead of frame-by-frame rendering on
+/// every scene measured with a static camera and on the moving-camera `builtin:dolly`, and
+/// the only temporal technique that is unbiased (it converges to `bdpt`) and renders the
+/// demo's caustics without fireflies at the effort of frame-by-frame path tracing.
+/// One default rather than a per-scene rule: what a scene needs (reuse or not) is decided
+/// by the technique from its own reuse statistics while it renders, not guessed by the
+/// driver before the scene is seen.
+pub const DEFAULT_METHOD: &str = "stbpt";
+
 /// The technique called `name`, or an error listing the known ones.
 pub fn find(name: &str) -> Result<&'static dyn Technique, String> {
     TECHNIQUES

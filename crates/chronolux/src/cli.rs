@@ -90,7 +90,7 @@ pub struct RenderArgs {
     /// emitters only, 2 adds direct lighting. Default: unlimited (Russian roulette ends paths).
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
-    /// Light-transport method (default `path`). Every technique's settings can be set with
+    /// Light-transport method (default `stbpt`). Every technique's settings can be set with
     /// --set; an unknown key (e.g. `--set list=1`) lists the valid ones.
     #[arg(long, value_name = "METHOD", long_help = method_help(),
           value_parser = clap::builder::PossibleValuesParser::new(chronolux_render::registry::names()))]
@@ -191,9 +191,10 @@ pub struct InfoArgs {
 
 /// `--method`'s long help: every technique of the registry with its summary.
 pub fn method_help() -> String {
-    let mut s = String::from(
-        "Light-transport method (default `path`). Every setting of a technique can be set \
+    let mut s = format!(
+        "Light-transport method (default `{}`). Every setting of a technique can be set \
 with --set KEY=VALUE; an unknown key lists the valid ones.\n",
+        chronolux_render::registry::DEFAULT_METHOD
     );
     for t in chronolux_render::registry::TECHNIQUES {
         s += &format!("\n  {:<16} {}", t.name(), t.summary());

@@ -144,7 +144,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         .method
         .clone()
         .or_else(|| prev.method.clone())
-        .unwrap_or_else(|| "path".into());
+        .unwrap_or_else(|| registry::DEFAULT_METHOD.into());
     let tech = registry::find(&method).map_err(anyhow::Error::msg)?;
     // A config file's technique settings apply to its own method only.
     let base = match &file {

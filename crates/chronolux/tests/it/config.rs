@@ -95,6 +95,8 @@ fn a_settings_file_sets_keys_of_the_chosen_method() {
     let out = dir.join("out");
     ok(&run([
         "render",
+        "--method",
+        "path",
         "--config",
         file.to_str().unwrap(),
         "--frames",

@@ -14,6 +14,10 @@ fn render(dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
     ];
     args.extend(FAST);
     args.extend(extra);
+    // The path tracer unless the test names another method (the default is stbpt).
+    if !extra.contains(&"--method") {
+        args.extend(["--method", "path"]);
+    }
     run(&args)
 }
 

@@ -373,7 +373,8 @@ pub fn resolve(
 }
 
 /// Applies `--photons N|auto` to photon settings: a count sets `photons` and clears
-/// `auto`; `auto` sets the stopping rule's defaults.
+/// `auto` where the method has one; `auto` sets the stopping rule's defaults (an error
+/// naming the valid keys for a method without one).
 pub fn set_photons(
     settings: &mut Value,
     count: &crate::dept::budget::PhotonCount,
@@ -382,7 +383,12 @@ pub fn set_photons(
     match count {
         PhotonCount::Fixed(n) => {
             set_key(settings, "photons", Value::from(*n))?;
-            set_key(settings, "auto", Value::Null)
+            // Only the methods with a stopping rule have `auto` to clear (`spt`'s pool
+            // is a fixed count).
+            if find_key(settings, "auto").is_some() {
+                set_key(settings, "auto", Value::Null)?;
+            }
+            Ok(())
         }
         PhotonCount::Auto(a) => set_key(
             settings,

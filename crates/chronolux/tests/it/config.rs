@@ -156,6 +156,42 @@ fn bad_settings_are_one_line_errors_naming_the_keys() {
 }
 
 #[test]
+fn photons_set_the_pool_of_spt_which_has_no_stopping_rule() {
+    // `--photons N` also clears the `auto` stopping rule of the DEPT methods; `spt` has
+    // none, and a fixed count must still reach its pool (bench quality sets effort so).
+    let dir = temp_dir("config-spt-photons");
+    ok(&run([
+        "render",
+        "--method",
+        "spt",
+        "--photons",
+        "3000",
+        "--frames",
+        "0",
+        "--resolution",
+        "8x8",
+        "--spp",
+        "1",
+        "--no-preview",
+        "--output",
+        dir.to_str().unwrap(),
+    ]));
+    assert_eq!(manifest(&dir)["settings"]["technique"]["photons"], 3000);
+    fails(
+        &run([
+            "render",
+            "--method",
+            "spt",
+            "--photons",
+            "auto",
+            "--output",
+            dir.to_str().unwrap(),
+        ]),
+        &["auto", "photons"],
+    );
+}
+
+#[test]
 fn help_lists_every_technique_of_the_registry() {
     let help = stdout(&run(["render", "--help"]));
     for t in chronolux_render::registry::TECHNIQUES {

@@ -28,6 +28,11 @@ pub struct CompareArgs {
     /// Write an SVG plot of FLIP, relMSE and flicker per frame.
     #[arg(long, value_name = "FILE")]
     pub plot: Option<PathBuf>,
+    /// A second sequence under test (e.g. the same frames rendered frame by frame at equal
+    /// time), measured against the same reference: its summary is printed and `--plot`
+    /// draws it dashed in the same panels, on the same axes.
+    #[arg(long, value_name = "DIR")]
+    pub versus: Option<PathBuf>,
     /// Write the HDR-FLIP error map of every frame as DIR/flip_NNNN.png (magma colour map,
     /// as the FLIP tool draws it).
     #[arg(long, value_name = "DIR")]
@@ -259,6 +264,12 @@ pub fn csv(m: &[FrameMetrics]) -> String {
 
 /// A hand-written SVG: three panels (FLIP HDR/LDR, relMSE, flicker) against frame number.
 pub fn svg_plot(m: &[FrameMetrics], title: &str) -> String {
+    svg_plot_many(&[("", m)], title)
+}
+
+/// [`svg_plot`] of several sequences on shared axes: the first solid, the others dashed,
+/// each series' legend suffixed with its sequence's label.
+pub fn svg_plot_many(seqs: &[(&str, &[FrameMetrics])], title: &str) -> String {
     let (pw, ph, left, top, gap) = (720.0f64, 170.0f64, 70.0f64, 40.0f64, 50.0f64);
     let n_panels = 3.0;
     let height = top + n_panels * (ph + gap);
@@ -266,7 +277,7 @@ pub fn svg_plot(m: &[FrameMetrics], title: &str) -> String {
     let _ = writeln!(
         s,
         r#"<svg xmlns="http://www.w3.org/2000/svg" width="{}" height="{height}" font-family="sans-serif" font-size="12">"#,
-        left + pw + 130.0
+        left + pw + 230.0
     );
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let _ = writeln!(
@@ -274,52 +285,57 @@ pub fn svg_plot(m: &[FrameMetrics], title: &str) -> String {
         r#"<text x="{left}" y="22" font-size="15">{}</text>"#,
         xml_escape(title)
     );
-    let f0 = m.first().map_or(0, |x| x.frame) as f64;
-    let f1 = m
-        .last()
-        .map_or(1, |x| x.frame)
-        .max(m.first().map_or(0, |x| x.frame) + 1) as f64;
-    type Series<'a> = (&'a str, &'a str, Vec<(f64, f64)>);
-    let panels: Vec<(&str, Vec<Series>)> = vec![
-        (
-            "FLIP (mean)",
-            vec![
-                (
-                    "HDR-FLIP",
-                    "#b5367a",
-                    m.iter().map(|x| (x.frame as f64, x.flip_hdr)).collect(),
-                ),
-                (
-                    "LDR-FLIP",
-                    "#f89540",
-                    m.iter().map(|x| (x.frame as f64, x.flip_ldr)).collect(),
-                ),
-            ],
-        ),
-        (
-            "relMSE",
-            vec![(
-                "relMSE",
-                "#2c7bb6",
-                m.iter().map(|x| (x.frame as f64, x.relmse)).collect(),
-            )],
-        ),
-        (
-            "flicker",
-            vec![(
-                "flicker",
-                "#1a9641",
-                m.iter()
-                    .filter_map(|x| x.flicker.map(|v| (x.frame as f64, v)))
-                    .collect(),
-            )],
-        ),
+    let frames = || seqs.iter().flat_map(|(_, m)| m.iter().map(|x| x.frame));
+    let f0 = frames().min().unwrap_or(0) as f64;
+    let f1 = frames().max().unwrap_or(1).max(f0 as u32 + 1) as f64;
+    // (label, colour, dashed, points)
+    type Series = (String, &'static str, bool, Vec<(f64, f64)>);
+    let mut panels: Vec<(&str, Vec<Series>)> = vec![
+        ("FLIP (mean)", vec![]),
+        ("relMSE", vec![]),
+        ("flicker", vec![]),
     ];
+    for (q, (label, m)) in seqs.iter().enumerate() {
+        let name = |n: &str| {
+            if label.is_empty() {
+                n.to_string()
+            } else {
+                format!("{n} {label}")
+            }
+        };
+        let dashed = q > 0;
+        panels[0].1.push((
+            name("HDR-FLIP"),
+            "#b5367a",
+            dashed,
+            m.iter().map(|x| (x.frame as f64, x.flip_hdr)).collect(),
+        ));
+        panels[0].1.push((
+            name("LDR-FLIP"),
+            "#f89540",
+            dashed,
+            m.iter().map(|x| (x.frame as f64, x.flip_ldr)).collect(),
+        ));
+        panels[1].1.push((
+            name("relMSE"),
+            "#2c7bb6",
+            dashed,
+            m.iter().map(|x| (x.frame as f64, x.relmse)).collect(),
+        ));
+        panels[2].1.push((
+            name("flicker"),
+            "#1a9641",
+            dashed,
+            m.iter()
+                .filter_map(|x| x.flicker.map(|v| (x.frame as f64, v)))
+                .collect(),
+        ));
+    }
     for (k, (name, series)) in panels.iter().enumerate() {
         let y0 = top + k as f64 * (ph + gap);
         let vmax = series
             .iter()
-            .flat_map(|(_, _, p)| p.iter().map(|q| q.1))
+            .flat_map(|(_, _, _, p)| p.iter().map(|q| q.1))
             .filter(|v| v.is_finite())
             .fold(0.0f64, f64::max);
         let vmax = if vmax > 0.0 { vmax * 1.1 } else { 1.0 };
@@ -358,7 +374,12 @@ pub fn svg_plot(m: &[FrameMetrics], title: &str) -> String {
                 y0 + ph + 17.0
             );
         }
-        for (j, (label, color, pts)) in series.iter().enumerate() {
+        for (j, (label, color, dashed, pts)) in series.iter().enumerate() {
+            let dash = if *dashed {
+                r#" stroke-dasharray="7 4""#
+            } else {
+                ""
+            };
             let pts: Vec<String> = pts
                 .iter()
                 .filter(|p| p.1.is_finite())
@@ -370,18 +391,19 @@ pub fn svg_plot(m: &[FrameMetrics], title: &str) -> String {
             } else if !pts.is_empty() {
                 let _ = writeln!(
                     s,
-                    r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="1.8"/>"#,
+                    r#"<polyline points="{}" fill="none" stroke="{color}" stroke-width="1.8"{dash}/>"#,
                     pts.join(" ")
                 );
             }
             let ly = y0 + 14.0 + 18.0 * j as f64;
             let _ = writeln!(
                 s,
-                r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{color}" stroke-width="3"/><text x="{}" y="{}">{label}</text>"#,
+                r#"<line x1="{}" y1="{ly}" x2="{}" y2="{ly}" stroke="{color}" stroke-width="3"{dash}/><text x="{}" y="{}">{}</text>"#,
                 left + pw + 10.0,
                 left + pw + 30.0,
                 left + pw + 35.0,
-                ly + 4.0
+                ly + 4.0,
+                xml_escape(label)
             );
         }
     }
@@ -500,6 +522,12 @@ fn create_parent(path: &Path) -> Result<()> {
     Ok(())
 }
 
+/// A folder's last component (its whole path if it has none), for legends.
+fn dir_label(dir: &Path) -> String {
+    dir.file_name()
+        .map_or_else(|| dir.display().to_string(), |n| n.to_string_lossy().into())
+}
+
 fn fmt_flicker(v: Option<f64>) -> String {
     v.map_or_else(|| "-".into(), |v| format!("{v:.4}"))
 }
@@ -567,15 +595,45 @@ pub fn run(args: CompareArgs) -> Result<()> {
         s.flip_ldr,
         fmt_flicker(s.flicker)
     );
+    let versus = match &args.versus {
+        Some(dir) => {
+            let frames = list_frames(dir)?;
+            let v = compare_frames(&frames, &reference, ppd, |_, _, _, _| Ok(()))?;
+            let s = summarize(&v);
+            println!(
+                "versus {}: {} frame(s) [{}], relMSE {:.4e}, HDR-FLIP {:.4}, LDR-FLIP {:.4}, flicker {}",
+                dir.display(),
+                v.len(),
+                ranges(v.iter().map(|m| m.frame)),
+                s.relmse,
+                s.flip_hdr,
+                s.flip_ldr,
+                fmt_flicker(s.flicker)
+            );
+            Some((dir, v))
+        }
+        None => None,
+    };
     if let Some(p) = &args.csv {
         create_parent(p)?;
         std::fs::write(p, csv(&results)).with_context(|| format!("writing {}", p.display()))?;
     }
     if let Some(p) = &args.plot {
         create_parent(p)?;
-        let title = format!("{} vs {}", args.test_dir.display(), args.ref_dir.display());
-        std::fs::write(p, svg_plot(&results, &title))
-            .with_context(|| format!("writing {}", p.display()))?;
+        let svg = match &versus {
+            None => svg_plot(
+                &results,
+                &format!("{} vs {}", args.test_dir.display(), args.ref_dir.display()),
+            ),
+            Some((dir, v)) => {
+                let (a, b) = (dir_label(&args.test_dir), dir_label(dir));
+                svg_plot_many(
+                    &[(a.as_str(), &results), (b.as_str(), v)],
+                    &format!("{a} (solid) and {b} (dashed) vs {}", args.ref_dir.display()),
+                )
+            }
+        };
+        std::fs::write(p, svg).with_context(|| format!("writing {}", p.display()))?;
     }
     if let Some(p) = &args.preview {
         create_parent(p)?;
@@ -608,6 +666,7 @@ mod tests {
             ref_dir: r.into(),
             csv: None,
             plot: None,
+            versus: None,
             heatmaps: None,
             preview: None,
             fps: 24.0,
@@ -776,5 +835,34 @@ mod tests {
                 .contains("<polyline")
         );
         assert!(std::fs::metadata(o.join("p.gif")).unwrap().len() > 100);
+    }
+
+    #[test]
+    fn versus_is_measured_and_drawn_dashed_on_shared_axes() {
+        let (t, v, r, o) = (tmp("vs-t"), tmp("vs-v"), tmp("vs-r"), tmp("vs-o"));
+        // Test 0.55 everywhere (relMSE 0.0025/0.2601), versus 0.6 (0.01/0.26, four times
+        // higher): the relMSE axis must reach the versus values, both polylines drawn.
+        for f in 0..3u32 {
+            write_exr(t.join(format!("frame_{f:04}.exr")), &constant(8, 8, 0.55)).unwrap();
+            write_exr(v.join(format!("frame_{f:04}.exr")), &constant(8, 8, 0.6)).unwrap();
+            write_exr(r.join(format!("frame_{f:04}.exr")), &constant(8, 8, 0.5)).unwrap();
+        }
+        let mut a = args(&t, &r);
+        a.plot = Some(o.join("m.svg"));
+        a.versus = Some(v.clone());
+        run(a).unwrap();
+        let svg = std::fs::read_to_string(o.join("m.svg")).unwrap();
+        // 3 panels: solid and dashed series (2 FLIP + relMSE + flicker per sequence).
+        assert_eq!(svg.matches("<polyline").count(), 8, "{svg}");
+        assert_eq!(svg.matches("<polyline points").count(), 8);
+        assert_eq!(
+            svg.matches(r#"stroke-dasharray="7 4"/>"#).count(),
+            8,
+            "4 dashed polylines + 4 dashed legend lines"
+        );
+        assert!(svg.contains("relMSE chronolux-compare") && svg.contains("vs-v"));
+        // The relMSE axis's top tick is 1.1 × the largest value, the versus 0.01 / 0.26.
+        let top = 1.1 * 0.01 / 0.26;
+        assert!(svg.contains(&format!(">{}<", fmt_tick(top))), "{top}");
     }
 }

@@ -133,8 +133,13 @@ fn watch_events(
 #[test]
 fn an_edit_streams_a_new_image_and_the_queue_drains_to_zero() {
     let v = serve();
-    let (first, _) = watch_events(v.addr, Duration::from_secs(60), |_| true);
-    assert!(first[0].starts_with("data:image/png;base64,"));
+    let max_spp = small_options().max_spp;
+    // Idle before the edit: nothing queued and the image at max_spp, where it stops
+    // changing (the pass index picks the samples, so this image is deterministic).
+    let idle = |s: &Value| s["queued"] == 0 && s["spp"] == max_spp;
+    let (before, _) = watch_events(v.addr, Duration::from_secs(120), idle);
+    let before = before.last().unwrap().clone();
+    assert!(before.starts_with("data:image/png;base64,"));
     let (code, body) = request(
         v.addr,
         "POST",
@@ -152,9 +157,14 @@ fn an_edit_streams_a_new_image_and_the_queue_drains_to_zero() {
         .as_u64()
         .unwrap();
     let (images, last) = watch_events(v.addr, Duration::from_secs(120), |s| {
-        s["edit"].as_u64() == Some(id) && s["queued"] == 0
+        s["edit"].as_u64() == Some(id) && idle(s)
     });
     assert!(last["settled_after"].is_number(), "{last}");
-    assert_ne!(images.last().unwrap(), &first[0], "the image changed");
+    assert!(last["invalidated"].as_u64() > Some(0), "{last}");
+    assert_ne!(
+        images.last().unwrap(),
+        &before,
+        "the idle image after the move differs from the one before"
+    );
     v.stop().unwrap();
 }

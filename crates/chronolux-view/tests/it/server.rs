@@ -111,7 +111,8 @@ fn watch_events(
             t0.elapsed() < timeout,
             "no matching status within {timeout:?}"
         );
-        line.clear();
+        // A read that times out keeps what it read in `line`; it is cleared only once a
+        // whole line has been handled.
         match r.read_line(&mut line) {
             Ok(0) => panic!("the event stream ended"),
             Ok(_) => {}
@@ -119,10 +120,12 @@ fn watch_events(
             Err(e) if e.kind() == std::io::ErrorKind::TimedOut => continue,
             Err(e) => panic!("{e}"),
         }
-        let Some(data) = line.trim_end().strip_prefix("data: ") else {
+        let data = line.trim_end().strip_prefix("data: ").map(str::to_string);
+        line.clear();
+        let Some(data) = data else {
             continue;
         };
-        let msg: Value = serde_json::from_str(data).expect("frame data is JSON");
+        let msg: Value = serde_json::from_str(&data).expect("frame data is JSON");
         images.push(msg["image"].as_str().unwrap().to_string());
         if done(&msg["status"]) {
             return (images, msg["status"].clone());

@@ -139,7 +139,7 @@ impl Viewer {
     /// [`Viewer::new`] from a scene already loaded (and its first frame).
     pub fn from_scene(scene: EditableScene, frame: FrameScene, options: ViewOptions) -> Viewer {
         let state = SptState::new(Arc::new(frame), settings(&options));
-        let n = (scene_size(&state)) as usize;
+        let n = pixel_count(&state);
         let status = Status {
             t: scene.time(),
             pool: state.layout.photons(),
@@ -306,7 +306,7 @@ fn settings(o: &ViewOptions) -> SptSettings {
     }
 }
 
-fn scene_size(st: &SptState) -> u32 {
+fn pixel_count(st: &SptState) -> usize {
     let c = &st.scene().camera;
-    c.width * c.height
+    c.width as usize * c.height as usize
 }

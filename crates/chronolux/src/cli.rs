@@ -39,6 +39,10 @@ pub enum Command {
     /// Check a farm render's folder: every frame present and readable, manifests merged
     /// into run.json, preview written, seams between segments measured.
     Assemble(crate::farm::AssembleArgs),
+    /// Live viewer: a page on 127.0.0.1 showing the progressive image while you move the
+    /// animation time, nodes and lights and change materials (selective photon tracing
+    /// updates the indirect light).
+    View(crate::view::ViewArgs),
 }
 
 /// Which scene and how to present it; shared by every subcommand that loads a scene.

@@ -12,6 +12,7 @@ mod quality;
 mod reference;
 mod render;
 mod scene_input;
+mod view;
 
 use clap::Parser;
 use std::io::Write;
@@ -54,6 +55,7 @@ fn main() {
         cli::Command::Plan(p) => farm::plan(p),
         cli::Command::Farm(f) => farm::farm(f),
         cli::Command::Assemble(a) => farm::assemble(a),
+        cli::Command::View(v) => view::run(v),
     };
     if let Err(e) = result {
         eprintln!("error: {}", one_line(&e));

@@ -345,6 +345,24 @@ impl FrameBuilder {
         width: u32,
         height: u32,
     ) -> Result<Self, FrameError> {
+        Self::with_movable(desc, anim, camera, width, height, &[])
+    }
+
+    /// [`FrameBuilder::new`], with the nodes `movable[n]` (and their descendants) treated
+    /// as animated even where the clip leaves them still: their meshes get their own
+    /// instance instead of joining the static BVH, so that a later builder over the same
+    /// scene with those nodes moved has the same instances, and [`FrameDelta`] reports only
+    /// the moved ones (the live viewer's edits). A shorter slice leaves the rest as `new`.
+    ///
+    /// [`FrameDelta`]: super::delta::FrameDelta
+    pub fn with_movable(
+        desc: Arc<SceneDesc>,
+        anim: Option<AnimationId>,
+        camera: CameraChoice,
+        width: u32,
+        height: u32,
+        movable: &[bool],
+    ) -> Result<Self, FrameError> {
         if let CameraChoice::Named(name) = &camera
             && find_camera(&desc, Some(name)).is_none()
         {
@@ -361,7 +379,14 @@ impl FrameBuilder {
                 },
             ));
         }
-        let dynamic = anim::dynamic_nodes(&desc, anim);
+        let mut dynamic = anim::dynamic_nodes(&desc, anim);
+        if movable.iter().any(|&m| m) {
+            for id in desc.topological_order() {
+                let i = id.index();
+                let parent_moves = desc.nodes[i].parent.is_some_and(|p| dynamic[p.index()]);
+                dynamic[i] |= movable.get(i).copied().unwrap_or(false) || parent_moves;
+            }
+        }
         let mut materials = desc.materials.clone();
         let default_material = materials.len() as u32;
         materials.push(Material::gltf_default());

@@ -343,3 +343,46 @@ fn light_material_and_camera_changes_are_detected() {
     assert!(!FrameDelta::between(&fr[0], &fr[0]).camera_changed());
     assert!(FrameDelta::between(&fr[2], &end[0]).camera_changed());
 }
+
+#[test]
+fn movable_nodes_get_their_own_instance_and_a_moved_one_is_all_that_changes() {
+    let desc = stage::demo();
+    let anim = Some(AnimationId(0));
+    let movable = vec![true; desc.nodes.len()];
+    let build = |d: SceneDesc| {
+        FrameBuilder::with_movable(Arc::new(d), anim, CameraChoice::First, 16, 16, &movable)
+            .unwrap()
+            .build(0.5)
+    };
+    let a = build(desc.clone());
+    // Every mesh node is an instance of its own: no static instance holds the walls.
+    let meshes = desc.nodes.iter().filter(|n| n.mesh.is_some()).count();
+    assert_eq!(a.accel.instances().len(), meshes);
+    let mut moved = desc.clone();
+    let sphere = moved
+        .nodes
+        .iter()
+        .position(|n| n.name == "metal_sphere")
+        .unwrap();
+    moved.nodes[sphere].transform.translation.x += 0.25;
+    let b = build(moved);
+    let d = FrameDelta::between(&a, &b);
+    assert_eq!(
+        changed_instances(&d),
+        vec![instance_of(&a, &desc, "metal_sphere")],
+        "another builder over the edited scene: only the moved sphere changed"
+    );
+    assert!(!d.lights_changed() && !d.materials_changed() && !d.camera_changed());
+    // Same pixels' worth of scene as `new`: an empty mask is `new`.
+    let plain = FrameBuilder::with_movable(
+        Arc::new(desc.clone()),
+        anim,
+        CameraChoice::First,
+        16,
+        16,
+        &[],
+    )
+    .unwrap()
+    .build(0.5);
+    assert!(FrameDelta::between(&plain, &builder(desc).build(0.5)).is_static());
+}

@@ -243,3 +243,29 @@ fn animation_target_node_out_of_range() {
     fails(&render_scene(&p, &[]), &want);
     fails(&run(["info", p.to_str().unwrap()]), &want);
 }
+
+#[test]
+fn view_with_a_bad_scene_or_a_port_in_use() {
+    let dir = temp_dir("view-missing");
+    let p = dir.join("nothing here.glb");
+    fails(
+        &run(["view", p.to_str().unwrap(), "--port", "0"]),
+        &["nothing here.glb", "no such file"],
+    );
+    fails(
+        &run(["view", "builtin:nope", "--port", "0"]),
+        &["builtin:demo"],
+    );
+    // A port taken by another listener: the viewer must not start (and so the test
+    // cannot hang on a server that runs until killed).
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port().to_string();
+    fails(
+        &run(["view", "--port", &port, "--photons", "1000"]),
+        &["cannot listen on 127.0.0.1", &port],
+    );
+    fails(
+        &run(["view", "--bind", "not-an-address"]),
+        &["not-an-address"],
+    );
+}

@@ -119,9 +119,10 @@ pub struct RenderArgs {
     /// Default 0. Techniques with motion blur: path, bdpt, stbpt.
     #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub shutter: Option<f32>,
-    /// The technique's `window` setting: `stbpt`: each sample serves the frames f-K..f+K
-    /// of the one it was made for (0 to 31, default 4); `spacetime-dept`: frames pooled on
-    /// each side (default 8).
+    /// The technique's `window` setting: `stbpt`: each sample serves at most the frames
+    /// f-K..f+K of the one it was made for (0 to 31, default 4; each frame's K is chosen
+    /// from the reuse statistics unless `--set adaptive=false`); `spacetime-dept`: frames
+    /// pooled on each side (default 8).
     #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=31))]
     pub window: Option<u32>,
     /// Photons per frame of the photon methods (`dept`, `dept-spatial`, `dept-bilateral`;

@@ -17,6 +17,7 @@ use chronolux_core::testing::{Estimate, block_t_test};
 use chronolux_render::bdpt::{Bdpt, BdptSettings};
 use chronolux_render::integrator::{Integrator, RenderedFrame};
 use chronolux_render::sequence::{ReuseStats, SequenceRenderer};
+use chronolux_render::temporal::stbpt::adapt::WindowDecision;
 use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings};
 
 const W: u32 = 32;
@@ -24,7 +25,9 @@ const H: u32 = 32;
 const BLOCK: u32 = 8;
 
 /// Renders frames `0..frames` with stbpt (window K, `spp` generated per frame) and returns
-/// frame `out` with its reuse statistics.
+/// frame `out` with its reuse statistics. K is fixed (no self-assessment): these tests check
+/// the estimator at a given window; [`stbpt_chooses_k_from_its_reuse_statistics`] checks
+/// the choice of K.
 fn stbpt_frame(
     desc: chronolux_core::scene::desc::SceneDesc,
     fps: f32,
@@ -42,6 +45,7 @@ fn stbpt_frame(
             ..Default::default()
         },
         window: k,
+        adaptive: false,
         ..Default::default()
     });
     for f in 0..=out {
@@ -189,4 +193,84 @@ fn stbpt_bit_identical_across_thread_counts() {
     assert_eq!(bits(&a), bits(&b));
     assert_eq!(a.stats, b.stats);
     assert_eq!(ra, rb);
+}
+
+/// Renders frames `0..frames` with stbpt (cap K, `spp` per frame) and returns each frame's
+/// reuse statistics and self-assessment (`reuse_decision`).
+fn stbpt_reports(
+    desc: chronolux_core::scene::desc::SceneDesc,
+    fps: f32,
+    frames: u32,
+    k: u32,
+    spp: u32,
+) -> Vec<(ReuseStats, WindowDecision)> {
+    let mut src = source(desc, W, H, fps, (0..frames).collect());
+    let mut r = Stbpt::new(StbptSettings {
+        bdpt: BdptSettings {
+            spp,
+            ..Default::default()
+        },
+        window: k,
+        ..Default::default()
+    });
+    (0..frames)
+        .map(|f| {
+            let img = r.render_frame(&mut src, f, &|_| {});
+            assert_eq!(img.invalid_samples, 0);
+            let reuse = serde_json::from_value(img.report["reuse"].clone()).expect("reuse");
+            let d = serde_json::from_value(img.report["reuse_decision"].clone())
+                .expect("stbpt reports its decision on K");
+            (reuse, d)
+        })
+        .collect()
+}
+
+/// The self-assessment (module doc, "Choosing K"). On a static animation every landing is
+/// a reuse and costs no ray, so every distance pays and every frame keeps the cap K. When
+/// the only light moves every frame (the demo's cube made an emitter, 3 fps), every sample
+/// served to another frame must be re-traced there, light subpath included: a re-traced
+/// landing is worth one fresh sample and costs one plus its landing ray, so no distance
+/// pays, stbpt notices it after the first generated frame and renders frame by frame
+/// (K = 0, only the frame's own samples, no re-traces), probing K = 1 every
+/// `PROBE_EVERY` frames.
+#[test]
+fn stbpt_chooses_k_from_its_reuse_statistics() {
+    let k = 2u32;
+    let frames = 10u32;
+    for (f, (reuse, d)) in stbpt_reports(stage::cornell_box(), 24.0, frames, k, 1)
+        .into_iter()
+        .enumerate()
+    {
+        assert_eq!(
+            (d.k, d.k_next, d.decision.as_str()),
+            (k, k, "keep"),
+            "{d:?}"
+        );
+        assert!(d.distances.iter().all(|s| s.pays()), "{d:?}");
+        let window = (f as u32 + k + 1).min(frames) - (f as u32).saturating_sub(k);
+        assert_eq!(reuse.window, window);
+    }
+    let reports = stbpt_reports(moving_emitter(), 3.0, frames, k, 1);
+    for (f, (reuse, d)) in reports.iter().enumerate() {
+        eprintln!("moving emitter, frame {f}: {reuse:?}\n  {d:?}");
+    }
+    // Frame 0 was generated at the cap; what it gave its neighbours did not pay.
+    let (_, d0) = &reports[0];
+    assert_eq!((d0.k, d0.k_next), (k, 0), "{d0:?}");
+    assert!(
+        d0.distances.iter().all(|s| !s.pays() && s.retraced > 0.0),
+        "{d0:?}"
+    );
+    assert_eq!(d0.decision, "frame-by-frame");
+    // Frames 1..=4 are generated at K = 0; the fourth of them asks for a probe at K = 1.
+    for (f, (_, d)) in reports.iter().enumerate().take(5).skip(1) {
+        assert_eq!(d.k, 0, "frame {f}: {d:?}");
+        assert!(d.distances.is_empty());
+        assert_eq!(d.decision, if f == 4 { "probe" } else { "frame-by-frame" });
+    }
+    assert_eq!(reports[5].1.k, 1);
+    // Frame 3 is served only by itself (frames 1–4 at K = 0, frame 5's probe reaches 4):
+    // frame-by-frame BDPT.
+    let (r3, _) = &reports[3];
+    assert_eq!((r3.window, r3.retraced, r3.reused), (1, 0, 0), "{r3:?}");
 }

@@ -6,10 +6,11 @@
 //! [`super::reuse`] computes the value and [`super::motion`] the motion-blur trajectory.
 
 use super::landing::{Landing, Walk, barycentrics};
-use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH};
+use super::reuse::Regenerated;
+use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH, adapt};
 use crate::bdpt::{
     BdptSettings, Vertex, VertexKind, connect_with, generate_camera_subpath,
-    generate_camera_subpath_with, generate_light_subpath, generate_light_subpath_with, mis_weight,
+    generate_camera_subpath_with, generate_light_subpath_with, mis_weight,
 };
 use crate::integrator::{TILE, tile_rect};
 use crate::temporal::window_film::Contribution;
@@ -39,6 +40,9 @@ pub(super) struct Counts {
     pub(super) partial: Vec<u64>,
     pub(super) retraced: Vec<u64>,
     pub(super) invalid: Vec<u64>,
+    /// Ray queries (closest-hit and shadow) of the re-traced landings' camera subpaths and
+    /// connections.
+    pub(super) retrace_queries: Vec<u64>,
 }
 
 impl Counts {
@@ -49,6 +53,7 @@ impl Counts {
             partial: vec![0; n],
             retraced: vec![0; n],
             invalid: vec![0; n],
+            retrace_queries: vec![0; n],
         }
     }
 
@@ -59,12 +64,18 @@ impl Counts {
             (&mut self.partial, &o.partial),
             (&mut self.retraced, &o.retraced),
             (&mut self.invalid, &o.invalid),
+            (&mut self.retrace_queries, &o.retrace_queries),
         ] {
             for (x, y) in a.iter_mut().zip(b) {
                 *x += y;
             }
         }
     }
+}
+
+/// Ray queries (closest-hit and shadow) counted in `s`.
+fn queries(s: &Stats) -> u64 {
+    s.rays + s.shadow_rays
 }
 
 /// Two answers of one ray that give the same vertex.
@@ -95,11 +106,16 @@ fn window_trace<'a>(
     wh: &'a mut WindowHit,
     masks: &'a mut Vec<FrameMask>,
     rays: Option<&'a mut Vec<Ray>>,
+    hits: Option<&'a mut Vec<Option<Hit>>>,
 ) -> impl FnMut(&Ray) -> Option<Hit> + 'a {
     masks.clear();
     let mut rays = rays;
     if let Some(r) = rays.as_deref_mut() {
         r.clear();
+    }
+    let mut hits = hits;
+    if let Some(h) = hits.as_deref_mut() {
+        h.clear();
     }
     let all = mfa.all_frames();
     move |ray| {
@@ -117,6 +133,9 @@ fn window_trace<'a>(
             }
         }
         masks.push(mask);
+        if let Some(h) = hits.as_deref_mut() {
+            h.push(hf);
+        }
         hf
     }
 }
@@ -129,6 +148,8 @@ pub(super) struct Entry {
     pub(super) r: Rgb,
     /// The contribution as computed in f (for f itself, no rounding from the split).
     pub(super) c: Rgb,
+    /// t ≥ 3: `wi` is x1's sampled continuation, shared by every such entry.
+    pub(super) continuation: bool,
     /// Window frames in which the entry's shadow ray is unoccluded.
     pub(super) vis: FrameMask,
 }
@@ -141,13 +162,19 @@ pub(super) struct Scratch {
     /// Per traced ray of the camera / light subpath: the window frames reproducing it.
     cam_masks: Vec<FrameMask>,
     light_masks: Vec<FrameMask>,
+    /// Frame f's hits of the light subpath's rays.
+    light_hits: Vec<Option<Hit>>,
+    /// Per light vertex i: the window frames in which vertices 0..=i are reproduced (same
+    /// lights and materials, the rays that made vertices 1..=i give f's hits).
+    light_prefix: Vec<FrameMask>,
     wh: WindowHit,
     light: Vec<Vertex>,
     light_g: Vec<Vertex>,
     cam_g: Vec<Vertex>,
     entries: Vec<Entry>,
-    /// Frame f's light-tracing splats: (pixel, value, frames where unoccluded).
-    splats: Vec<(u32, Rgb, FrameMask)>,
+    /// Frame f's light-tracing splats: (light vertices s, pixel, value, frames where
+    /// unoccluded).
+    splats: Vec<(usize, u32, Rgb, FrameMask)>,
 }
 
 /// Read-only state of one generated frame.
@@ -201,9 +228,10 @@ pub(super) struct TileOut {
 }
 
 impl Generation<'_> {
-    /// The t = 1 strategies of `light` in frame `j`, splatted into `out`. With `record`
-    /// (frame f only), shadow rays are answered for the whole window and every splat is
-    /// recorded with the frames it is unoccluded in, for the frames that share f's camera.
+    /// The t = 1 strategies of `light` with at least `s_min` light vertices in frame `j`,
+    /// splatted into `out`. With `record` (frame f only), shadow rays are answered for the
+    /// whole window and every splat is recorded with its s and the frames it is unoccluded
+    /// in, for the frames that share f's camera.
     #[allow(clippy::too_many_arguments)] // reason: the subpaths, the frame and the outputs
     fn light_trace(
         &self,
@@ -211,9 +239,10 @@ impl Generation<'_> {
         light: &[Vertex],
         camera: &[Vertex],
         conn: &PixelSampler,
+        s_min: usize,
         out: &mut TileOut,
         invalid: &mut u64,
-        mut record: Option<&mut Vec<(u32, Rgb, FrameMask)>>,
+        mut record: Option<&mut Vec<(usize, u32, Rgb, FrameMask)>>,
     ) {
         if !self.bdpt.light_tracing {
             return;
@@ -223,7 +252,7 @@ impl Generation<'_> {
         let max_segments = self.bdpt.depth() as usize;
         let mut sampler = conn.clone();
         let all = self.mfa.all_frames();
-        for s in 2..=light.len() {
+        for s in s_min.max(2)..=light.len() {
             if s > max_segments {
                 break;
             }
@@ -261,7 +290,7 @@ impl Generation<'_> {
             let (x, y) = (r.x as u32, r.y as u32);
             if r.x >= 0.0 && r.y >= 0.0 && x < w && y < h {
                 if let Some(rec) = record.as_deref_mut() {
-                    rec.push((y * w + x, c.l, vis));
+                    rec.push((s, y * w + x, c.l, vis));
                 }
                 if vis >> j & 1 == 1 {
                     out.splats.push(Contribution {
@@ -364,6 +393,7 @@ impl Generation<'_> {
                     wi,
                     r,
                     c: l,
+                    continuation: t >= 3,
                     vis,
                 });
             }
@@ -401,6 +431,7 @@ impl Generation<'_> {
                 &mut sc.wh,
                 &mut sc.cam_masks,
                 Some(&mut sc.cam_rays),
+                None,
             ),
         );
         generate_light_subpath_with(
@@ -409,14 +440,36 @@ impl Generation<'_> {
             &mut ls,
             &mut sc.light,
             st,
-            &mut window_trace(self.mfa, scene_f, jf, &mut sc.wh, &mut sc.light_masks, None),
+            &mut window_trace(
+                self.mfa,
+                scene_f,
+                jf,
+                &mut sc.wh,
+                &mut sc.light_masks,
+                None,
+                Some(&mut sc.light_hits),
+            ),
         );
         st.samples += 1;
         let (cam, light) = (&sc.cam, &sc.light);
 
         // Validity of the sampled segments in the other frames.
         let and = |m: &[FrameMask]| m.iter().fold(all, |a, b| a & b);
-        let light_valid = and(&sc.light_masks) & self.lights_same;
+        // The light subpath's vertices depend on the lights and on the materials of the
+        // surfaces it meets.
+        let light_same = self.lights_same & self.materials_same;
+        let light_valid = and(&sc.light_masks) & light_same;
+        sc.light_prefix.clear();
+        sc.light_prefix.push(light_same);
+        for (i, &m) in sc
+            .light_masks
+            .iter()
+            .enumerate()
+            .take(light.len().saturating_sub(1))
+        {
+            let prev = sc.light_prefix[i];
+            sc.light_prefix.push(prev & m);
+        }
         let x1 = cam.get(1).filter(|v| v.kind == VertexKind::Surface);
         // Camera segments after x1 reproduced (the camera subpath is the same walk in g).
         let cam_segments = if x1.is_some() {
@@ -455,7 +508,7 @@ impl Generation<'_> {
         out.counts.landed[jf] += 1;
         sc.splats.clear();
         let record = (n > 1).then_some(&mut sc.splats);
-        self.light_trace(jf, light, cam, &ns, out, &mut inv, record);
+        self.light_trace(jf, light, cam, &ns, 2, out, &mut inv, record);
         out.counts.invalid[jf] += inv;
 
         // Other frames of the window.
@@ -475,20 +528,45 @@ impl Generation<'_> {
             let mut inv = 0u64;
             // Light part: reused or re-generated from the same light stream.
             let light_ok = light_valid >> j & 1 == 1;
+            // Light vertices reproduced in g (module doc, "Valid prefixes").
+            let light_kept = sc
+                .light_prefix
+                .iter()
+                .take_while(|&&m| m >> j & 1 == 1)
+                .count();
             if !light_ok {
+                // Regenerated from the same stream: the rays of the reproduced prefix are
+                // f's rays with f's hits in g, answered without a traversal.
                 let mut l2 = ls0.clone();
-                generate_light_subpath(
+                let mut ray_index = 0usize;
+                let mut answered = 0u64;
+                let hits = &sc.light_hits;
+                generate_light_subpath_with(
                     scene_g,
                     self.bdpt,
                     &mut l2,
                     &mut sc.light_g,
                     &mut out.stats[j],
+                    &mut |r| {
+                        let i = ray_index;
+                        ray_index += 1;
+                        // Ray i leaves vertex i and makes vertex i + 1.
+                        if i + 1 < light_kept {
+                            answered += 1;
+                            hits[i]
+                        } else {
+                            scene_g.intersect(r)
+                        }
+                    },
                 );
+                out.stats[j].rays -= answered;
             }
-            if light_ok && self.same_camera >> j & 1 == 1 {
-                // Same light subpath, same camera: the same splats, where unoccluded in g.
-                for &(pixel, value, vis) in &sc.splats {
-                    if vis >> j & 1 == 1 {
+            let same_camera = self.same_camera >> j & 1 == 1;
+            if same_camera {
+                // Same camera: the splats of the reproduced light vertices are f's, where
+                // unoccluded in g; the others are made from g's light subpath.
+                for &(s, pixel, value, vis) in &sc.splats {
+                    if s <= light_kept && vis >> j & 1 == 1 {
                         out.splats.push(Contribution {
                             frame: frame_g,
                             pixel,
@@ -498,9 +576,21 @@ impl Generation<'_> {
                         });
                     }
                 }
+                if !light_ok {
+                    self.light_trace(
+                        j,
+                        &sc.light_g,
+                        cam,
+                        &ns,
+                        light_kept + 1,
+                        out,
+                        &mut inv,
+                        None,
+                    );
+                }
             } else {
                 let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
-                self.light_trace(j, light_g, cam, &ns, out, &mut inv, None);
+                self.light_trace(j, light_g, cam, &ns, 2, out, &mut inv, None);
             }
 
             // Camera part: where does the sample land in g, and how does it serve g?
@@ -522,8 +612,12 @@ impl Generation<'_> {
                     let partial = matches!(landing, Landing::Partial(_));
                     around = self.trajectory(j, jf, x1, esc_dir);
                     let v = x1.expect("reuse needs x1 on a surface");
-                    let regenerated =
-                        partial.then_some((&sc.light_g[..], &cam[..], &sc.cam_rays[..]));
+                    let regenerated = partial.then_some(Regenerated {
+                        light: &sc.light_g,
+                        cam,
+                        cam_rays: &sc.cam_rays,
+                        kept: light_kept,
+                    });
                     let l = self.reused_value(
                         j,
                         v,
@@ -541,10 +635,13 @@ impl Generation<'_> {
                 }
                 Landing::RetraceConnections(r) => {
                     out.counts.retraced[j] += 1;
+                    let before = queries(&out.stats[j]);
                     let l = self.camera_strategies(j, light_g, cam, &ns, &mut out.stats[j]);
+                    out.counts.retrace_queries[j] += queries(&out.stats[j]) - before;
                     (r, l, false)
                 }
                 Landing::Retrace(r) => {
+                    let before = queries(&out.stats[j]);
                     let mut c2 = cs0.clone();
                     generate_camera_subpath(
                         scene_g,
@@ -560,6 +657,7 @@ impl Generation<'_> {
                         around = self.trajectory(j, j, sc.cam_g.get(1), Some(d));
                     }
                     let l = self.camera_strategies(j, light_g, &sc.cam_g, &ns, &mut out.stats[j]);
+                    out.counts.retrace_queries[j] += queries(&out.stats[j]) - before;
                     (r, l, false)
                 }
             };
@@ -577,14 +675,16 @@ impl Generation<'_> {
 }
 
 impl Stbpt {
-    /// Generates the samples of frame `f` and adds them to every frame of its window.
+    /// Generates the samples of frame `f` with window half-width `k`, adds them to every
+    /// frame of its window and assesses what serving each distance gave
+    /// ([`adapt::assess`]): sets the K of the next generated frame.
     pub(super) fn generate(
         &mut self,
         source: &mut FrameSource,
         f: u32,
+        k: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) {
-        let k = self.k();
         let frames = source.window(f, k, k);
         let scenes: Vec<Arc<FrameScene>> = frames.iter().map(|&g| source.frame(g)).collect();
         let jf = frames
@@ -705,9 +805,35 @@ impl Stbpt {
             p.partial += counts.partial[j];
             p.retraced += counts.retraced[j];
             p.invalid += counts.invalid[j];
+            p.served_by += 1;
         }
-        let generated = (w as u64 * h as u64 * spp as u64).max(1) as f64;
-        self.served
-            .insert(f, counts.landed.iter().sum::<u64>() as f64 / generated);
+        let generated = (w as u64 * h as u64 * spp as u64).max(1);
+        self.served.insert(
+            f,
+            counts.landed.iter().sum::<u64>() as f64 / generated as f64,
+        );
+        let served: Vec<adapt::Served> = frames
+            .iter()
+            .enumerate()
+            .map(|(j, &g)| adapt::Served {
+                distance: g.abs_diff(f),
+                landed: counts.landed[j],
+                reused: counts.reused[j],
+                retraced: counts.retraced[j],
+                stats: stats[j],
+                retrace_queries: counts.retrace_queries[j],
+            })
+            .collect();
+        let decision = adapt::assess(
+            &served,
+            generated,
+            k,
+            u32::from(self.settings.shutter > 0.0).min(self.k()),
+            self.k(),
+            self.settings.adaptive,
+            &mut self.zero_run,
+        );
+        self.k_next = decision.k_next;
+        self.decisions.insert(f, decision);
     }
 }

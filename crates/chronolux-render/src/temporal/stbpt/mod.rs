@@ -45,12 +45,25 @@
 //!    is `Le(x1 → wo_g)·w_e + Σ_k V_k(g) f(x1, wo_g, wi_k) ⊙ R_k`: only x1's BSDF and
 //!    emission are re-evaluated.
 //!    **Partial reuse** when only the light subpath is invalid in g (x1 and every camera
-//!    segment reproduced, same lights and materials): the strategies without light-subpath
-//!    vertices (s ≤ 1: emission, NEE, camera paths hitting a light) are reused as above,
-//!    and the strategies s ≥ 2 are recomputed in g's scene by connecting f's camera
-//!    subpath (which is g's walk too) to the light subpath regenerated in g, split at x1
-//!    the same way. Each strategy's weighted contribution is an unbiased estimate of its
-//!    share on its own, so mixing f's s ≤ 1 terms with g's s ≥ 2 terms is unbiased.
+//!    segment reproduced, same lights and materials): the strategies whose light vertices
+//!    are all reproduced in g — s ≤ p, the light subpath's valid prefix (below), and
+//!    always those without light-subpath vertices (s ≤ 1: emission, NEE, camera paths
+//!    hitting a light) — are reused as above, and the others are recomputed in g's scene
+//!    by connecting f's camera subpath (which is g's walk too) to the light subpath
+//!    regenerated in g, split at x1 the same way. A strategy (s, t), its contribution and
+//!    its MIS weight, depends only on light vertices 0..s and camera vertices 0..t, and
+//!    each strategy's weighted contribution is an unbiased estimate of its share on its
+//!    own, so mixing f's s ≤ p terms with g's s > p terms is unbiased.
+//!
+//!    **Valid prefix of a light subpath.** Vertex i of the light subpath is reproduced
+//!    in g (the same vertex) when g's lights and materials are f's and the rays that made
+//!    vertices 1..=i give f's hits in g (the multi-frame masks): the first p vertices.
+//!    A light subpath invalid in g is regenerated in g from the same light stream; its
+//!    first p − 1 rays are f's rays and are answered with f's hits, without a traversal,
+//!    so the regenerated subpath is exactly the one a full re-trace gives. With g's camera
+//!    equal to f's, the light-tracing splats (t = 1) with s ≤ p are f's (where their
+//!    shadow rays, answered for the window at generation, are unoccluded in g); only
+//!    those with s > p are made in g.
 //! 3. **Re-trace** otherwise: a fresh BDPT evaluation in g's scene, of the same streams,
 //!    for a camera ray through the raster position where x1 landed. A sample invalid for
 //!    g never contributes a stale value; re-tracing (instead of dropping) keeps the
@@ -132,6 +145,32 @@
 //! side. Test: a quad moving at constant speed against the analytic box⊗box blur
 //! (`tests/it/blur.rs`).
 //!
+//! # Choosing K
+//!
+//! Each generated frame f has its own half-width K_f ≤ `window` (the cap). After f's
+//! samples are made, [`adapt::assess`] compares, per distance d = |g − f| served, what
+//! reuse gave with what serving cost beyond re-tracing, both per generated sample and
+//! counted (not timed, so images do not depend on threads or load): value = 0.7 × reused
+//! landings (a reused sample is worth ≈ 0.7 of a fresh one); cost = the ray queries spent
+//! in those frames other than the re-traces' (landing rays, regenerated light subpaths,
+//! light tracing, partially recomputed strategies) over those of f's own samples (≈ a
+//! BDPT sample each), + 0.05 per landing (BSDF re-evaluation, film writes). A re-traced
+//! landing is a fresh sample at a fresh sample's price and counts neither way. The next
+//! generated frame gets the largest K such that every distance up to K paid, one more
+//! when all did (up to the cap). When distance 1 does not pay, K = 0: the samples serve
+//! only their own frame, i.e. the effort is spent as frame-by-frame `bdpt` spends it
+//! (without light tracing when the camera moves, see "Bias"); every [`adapt::PROBE_EVERY`]
+//! such frames one frame is generated at K = 1 to measure again. With motion blur K ≥ 1
+//! (the trajectories need the neighbouring frames). The decision and its
+//! statistics are reported per frame (`reuse_decision` in `run.json`). A frame's
+//! splats are scaled by the number of generated frames that served it, and a frame is
+//! output once every frame that may serve it (within the cap) is generated.
+//!
+//! What the counts leave out: the extra cost of a window query over a single-frame one
+//! (dynamic instances are answered per frame, so it grows with K on deforming meshes) is
+//! charged to f's own samples, i.e. counted as BDPT cost; the value of the light-tracing
+//! splats a frame receives from regenerated light subpaths is not counted.
+//!
 //! # Memory
 //!
 //! Samples are not stored: each is made, landed in every frame of its window and
@@ -162,6 +201,7 @@ use {
     chronolux_core::scene::delta::FrameDelta,
 };
 
+pub mod adapt;
 mod generation;
 mod landing;
 mod motion;
@@ -173,10 +213,14 @@ mod reuse;
 pub struct StbptSettings {
     /// The per-sample estimator (samples per pixel generated per frame, depth, MIS, seed).
     pub bdpt: BdptSettings,
-    /// Half-width K of the window [f − K, f + K] a sample serves (0 = frame by frame).
-    /// Default 4.
-    /// At most 31.
+    /// Largest half-width K of the window [f − K, f + K] a sample serves (0 = frame by
+    /// frame); with `adaptive`, each generated frame's K is chosen in 0..=window from the
+    /// reuse statistics (module doc, "Choosing K"). Default 4. At most 31.
     pub window: u32,
+    /// Choose K per generated frame from the reuse statistics (true), or always use
+    /// `window` (false). Default true.
+    #[serde(default = "adaptive_default")]
+    pub adaptive: bool,
     /// Motion blur: fraction of the frame interval the shutter is open, centred on the
     /// frame time (0 = off). Each landed sample's trajectory is splatted (see "Motion
     /// blur" in the module doc). Default 0. Not a light-transport setting: set from the
@@ -193,11 +237,16 @@ fn default_film_budget() -> u64 {
     512
 }
 
+fn adaptive_default() -> bool {
+    true
+}
+
 impl Default for StbptSettings {
     fn default() -> Self {
         StbptSettings {
             bdpt: BdptSettings::default(),
             window: 4,
+            adaptive: true,
             shutter: 0.0,
             film_budget_mb: default_film_budget(),
         }
@@ -223,6 +272,8 @@ struct Pending {
     partial: u64,
     retraced: u64,
     invalid: u64,
+    /// Generated frames whose samples served this frame (light subpaths: `spp` each).
+    served_by: u32,
 }
 
 /// Spatio-temporal BDPT; see the module documentation.
@@ -243,11 +294,21 @@ pub struct Stbpt {
     /// Mean number of frames served by the samples generated for each frame.
     served: BTreeMap<u32, f64>,
     last_output: Option<u32>,
+    /// K of the next generated frame (module doc, "Choosing K").
+    k_next: u32,
+    /// Consecutive generated frames at K = 0 ([`adapt::assess`]).
+    zero_run: u32,
+    /// The self-assessment of each generated frame, until the frame is output.
+    decisions: BTreeMap<u32, adapt::WindowDecision>,
 }
 
 impl Stbpt {
     pub fn new(settings: StbptSettings) -> Self {
+        let k_next = settings.window.min((MAX_WINDOW_FRAMES as u32 - 1) / 2);
         Stbpt {
+            k_next,
+            zero_run: 0,
+            decisions: BTreeMap::new(),
             settings,
             film: None,
             film_sq: None,
@@ -260,6 +321,7 @@ impl Stbpt {
         }
     }
 
+    /// The largest K (the `window` setting, capped by the multi-frame structure).
     fn k(&self) -> u32 {
         self.settings.window.min((MAX_WINDOW_FRAMES as u32 - 1) / 2)
     }
@@ -327,10 +389,13 @@ impl SequenceRenderer for Stbpt {
         self.last_output = Some(frame);
         while self.next < list.len() && list[self.next] <= frame.saturating_add(k) {
             let f = list[self.next];
-            self.generate(source, f, progress);
+            // Every frame of f's window is still open: f > last output + k ≥ … + k_next.
+            let kf = self.k_next.min(k);
+            self.generate(source, f, kf, progress);
             self.next += 1;
         }
-        let window = source.window(frame, k, k).len().max(1) as u32;
+        let p = self.pending.remove(&frame).unwrap_or_default();
+        let window = p.served_by.max(1);
         let spp = self.settings.bdpt.spp;
         let scene = source.frame(frame);
         let (w, h) = (scene.camera.width, scene.camera.height);
@@ -366,7 +431,6 @@ impl SequenceRenderer for Stbpt {
             })
             .collect();
         let pixels = means.iter().zip(&splats).map(|(&m, &s)| m + s).collect();
-        let p = self.pending.remove(&frame).unwrap_or_default();
         let npix = (w as f64 * h as f64).max(1.0);
         let reuse = ReuseStats {
             window,
@@ -379,6 +443,19 @@ impl SequenceRenderer for Stbpt {
             film: self.film_stats(),
         };
         self.served.retain(|&f, _| f + k >= frame);
+        let mut report: crate::integrator::Report = [(
+            "reuse".to_string(),
+            serde_json::to_value(reuse).expect("serialisable"),
+        )]
+        .into_iter()
+        .collect();
+        if let Some(d) = self.decisions.remove(&frame) {
+            report.insert(
+                "reuse_decision".to_string(),
+                serde_json::to_value(d).expect("serialisable"),
+            );
+        }
+        self.decisions.retain(|&f, _| f > frame);
         RenderedFrame {
             width: w,
             height: h,
@@ -386,12 +463,7 @@ impl SequenceRenderer for Stbpt {
             variance,
             stats: p.stats,
             invalid_samples: p.invalid,
-            report: [(
-                "reuse".to_string(),
-                serde_json::to_value(reuse).expect("serialisable"),
-            )]
-            .into_iter()
-            .collect(),
+            report,
             // The reused subpaths are not split into direct and indirect light.
             light: None,
         }

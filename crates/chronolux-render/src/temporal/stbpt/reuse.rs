@@ -9,17 +9,31 @@ use crate::bdpt::{Vertex, connect};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::Ray;
+use chronolux_core::math::Vec3;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::stats::Stats;
+
+/// Partial reuse in g: what the recomputed strategies are made of.
+pub(super) struct Regenerated<'a> {
+    /// g's light subpath.
+    pub(super) light: &'a [Vertex],
+    /// f's camera subpath (reproduced in g) and its rays.
+    pub(super) cam: &'a [Vertex],
+    pub(super) cam_rays: &'a [Ray],
+    /// Light vertices reproduced in g (the valid prefix).
+    pub(super) kept: usize,
+}
 
 impl Generation<'_> {
     /// The value in window frame `j` of a sample reused at its first eye vertex `v`
     /// (which is where it was in f): `Le(x1 → wo_g)·w_e + Σ_k V_k(g) f(x1, wo_g, wi_k) ⊙
     /// R_k` over the `entries` split off in f (`emission`: x1's own emitted radiance and
     /// its MIS weight). With `regenerated` = (g's light subpath, f's camera subpath, its
-    /// rays), only the entries s ≤ 1 are reused and the strategies s ≥ 2 are recomputed by
-    /// connecting f's camera subpath (reproduced in g) to g's light subpath in g's scene,
-    /// split at x1 the same way (partial reuse).
+    /// rays, the number p of light vertices reproduced in g), only the entries s ≤ max(p, 1)
+    /// are reused and the strategies with more light vertices are recomputed by connecting
+    /// f's camera subpath (reproduced in g) to g's light subpath in g's scene, split at x1
+    /// the same way (partial reuse). A strategy (s, t) — its contribution and its MIS
+    /// weight — depends only on light vertices 0..s and camera vertices 0..t.
     #[allow(clippy::too_many_arguments)] // reason: the sample's parts and the output
     pub(super) fn reused_value(
         &self,
@@ -27,29 +41,57 @@ impl Generation<'_> {
         v: &Vertex,
         emission: Option<(Rgb, f32)>,
         entries: &[Entry],
-        regenerated: Option<(&[Vertex], &[Vertex], &[Ray])>,
+        regenerated: Option<Regenerated>,
         ns: &PixelSampler,
         st: &mut Stats,
     ) -> Rgb {
         let scene_g = &self.scenes[j];
         let eye = scene_g.camera.position();
         let max_segments = self.bdpt.depth() as usize;
-        let reuse = regenerated.is_none();
+        let kept = regenerated.as_ref().map_or(usize::MAX, |r| r.kept.max(1));
         let sv = v.surface.as_ref().unwrap();
         let wo_g = (eye - v.p).normalize_or_zero();
-        let mut l = emission.map_or(Rgb::ZERO, |(_, wm)| scene_g.emitted(&sv.si, wo_g) * wm);
-        for e in entries {
-            if e.vis >> j & 1 == 1 && (reuse || e.s <= 1) {
-                l += sv.bsdf.f(wo_g, e.wi, TransportMode::Radiance) * e.r;
+        // x1 is where it was in f (samples are reused only then), so with f's eye the view
+        // direction is f's and the entries' values computed in f are g's: no BSDF
+        // re-evaluation.
+        let same_view = eye == self.scenes[self.jf].camera.position();
+        let kept_entries = entries
+            .iter()
+            .filter(|e| e.vis >> j & 1 == 1 && e.s <= kept);
+        let mut l;
+        if same_view {
+            l = emission.map_or(Rgb::ZERO, |(c, _)| c);
+            for e in kept_entries {
+                l += e.c;
+            }
+        } else {
+            l = emission.map_or(Rgb::ZERO, |(_, wm)| scene_g.emitted(&sv.si, wo_g) * wm);
+            // The entries t ≥ 3 share x1's continuation direction: one BSDF evaluation.
+            let mut continuation: Option<(Vec3, Rgb)> = None;
+            for e in kept_entries {
+                if e.continuation {
+                    let c = continuation.get_or_insert((e.wi, Rgb::ZERO));
+                    c.1 += e.r;
+                } else {
+                    l += sv.bsdf.f(wo_g, e.wi, TransportMode::Radiance) * e.r;
+                }
+            }
+            if let Some((wi, r)) = continuation {
+                l += sv.bsdf.f(wo_g, wi, TransportMode::Radiance) * r;
             }
         }
-        if let Some((light_g, cam, cam_rays)) = regenerated {
-            // s ≥ 2: f's camera subpath (reproduced in g) connected to g's light
+        if let Some(Regenerated {
+            light: light_g,
+            cam,
+            cam_rays,
+            ..
+        }) = regenerated
+        {
+            // s > kept: f's camera subpath (reproduced in g) connected to g's light
             // subpath in g's scene, split at x1 like the entries.
-            let same_view = wo_g == sv.wo;
             let mut sampler = ns.clone();
             for t in 2..=cam.len() {
-                for s in 2..=light_g.len() {
+                for s in (kept + 1).max(2)..=light_g.len() {
                     if s + t - 1 > max_segments {
                         continue;
                     }

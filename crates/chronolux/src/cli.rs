@@ -82,7 +82,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FPS", allow_negative_numbers = true)]
     pub fps: Option<f32>,
     /// Samples per pixel (1 to 1048576): the technique's `spp` setting. Default: the
-    /// technique's (64 for path, bdpt and stbpt; 16 camera samples for the photon methods).
+    /// technique's (64 for path and bdpt, 4 generated per frame for stbpt, each serving up to
+    /// 9 frames; 16 camera samples for the photon methods).
     #[arg(long, value_name = "N")]
     pub spp: Option<u32>,
     /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384). Default: 512 wide, height

@@ -241,10 +241,20 @@ fn adaptive_default() -> bool {
     true
 }
 
+/// Samples per pixel generated per frame by default (see [`StbptSettings::default`]).
+pub const DEFAULT_SPP: u32 = 4;
+
 impl Default for StbptSettings {
     fn default() -> Self {
         StbptSettings {
-            bdpt: BdptSettings::default(),
+            // 4 generated samples per pixel and frame, each landed in the 2K + 1 = 9
+            // frames of its window: 36 per pixel served, which on the demo is cleaner than
+            // frame-by-frame `path` at 64 spp for less CPU time (BENCHMARKS.md, "Issue 17:
+            // the default") — the effort a first `render` should spend.
+            bdpt: BdptSettings {
+                spp: DEFAULT_SPP,
+                ..BdptSettings::default()
+            },
             window: 4,
             adaptive: true,
             shutter: 0.0,

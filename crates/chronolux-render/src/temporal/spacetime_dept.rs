@@ -87,7 +87,8 @@ pub struct SpacetimeSettings {
     pub spp: u32,
     /// Past frames whose per-pixel light (the eye pass's light samples) a pixel pools
     /// with its own where the animation leaves its paths unchanged
-    /// ([`crate::dept::reuse`]); 0: none. Default 8.
+    /// ([`crate::dept::reuse`]); 0: none; at most `window` is used (a farm segment has
+    /// `window` frames of context). Default 8.
     pub light_history: u32,
     /// Target element count along the scene diagonal. Default 100.
     pub elements: f32,
@@ -641,9 +642,29 @@ impl SequenceRenderer for SpacetimeDept {
         let t0 = std::time::Instant::now();
         let eye = eye_pass(&view, scene, frame, s.spp, s.seed, progress);
         let t_eye = t0.elapsed();
-        // Per-pixel light of the past frames (already output, within `light_history`).
+        // Per-pixel light of the past frames within `light_history` (at most `window`, so
+        // that a farm segment's context of `window` frames holds them all).
+        let history = s.light_history.min(s.window);
         self.history
-            .retain(|(g, _, _)| *g < frame && g + s.light_history >= frame);
+            .retain(|(g, _, _)| *g < frame && g + history >= frame);
+        // Frames of the render list in that range that were not output here (a farm
+        // segment's context): their eye pass, as a single run over the range made it.
+        // The per-pixel light and the reach do not depend on the element solution (only
+        // the elements' term, which is not reused, does), so `view` serves any frame.
+        if history > 0 {
+            for g in source.window(frame, history, 0) {
+                if g >= frame || self.history.iter().any(|(h, _, _)| *h == g) {
+                    continue;
+                }
+                let sg = source.frame(g);
+                if !mesh.matches(&sg) {
+                    continue;
+                }
+                let e = eye_pass(&view, &sg, g, s.spp, s.seed, &|_| {});
+                let at = self.history.partition_point(|(h, _, _)| *h < g);
+                self.history.insert(at, (g, sg, e));
+            }
+        }
         let past: Vec<(&EyeRecord, Validity)> = self
             .history
             .iter()
@@ -677,7 +698,7 @@ impl SequenceRenderer for SpacetimeDept {
         let mean_pooled =
             pooled.iter().map(|&m| m as f64).sum::<f64>() / pooled.len().max(1) as f64;
         img.report.insert("light_spp".into(), mean_pooled.into());
-        if s.light_history > 0 {
+        if history > 0 {
             self.history.push((frame, scene_arc.clone(), eye));
         }
         self.mesh = Some(mesh);

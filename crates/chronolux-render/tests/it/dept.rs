@@ -784,7 +784,8 @@ fn spacetime_dept_reuses_pixel_light_only_where_nothing_changed() {
         let mut st = SpacetimeDept::new(SpacetimeSettings {
             spp,
             light_history,
-            window: 1,
+            // At least `light_history`: the pixel light pooled is limited to `window`.
+            window: 8,
             elements: 30.0,
             photons: 5_000,
             seed,

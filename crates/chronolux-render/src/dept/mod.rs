@@ -12,6 +12,7 @@
 pub mod budget;
 pub mod element_map;
 pub mod reconstruct;
+pub mod reuse;
 pub mod view;
 
 use crate::integrator::{Integrator, RenderedFrame, render_camera_rays};
@@ -34,8 +35,12 @@ pub struct DeptSettings {
     /// Target element count along the scene's bounding-box diagonal (element edge =
     /// diagonal / this). Default 100.
     pub elements: f32,
-    /// Longest chain of specular bounces followed by eye rays. Default 8.
+    /// Longest chain of specular (delta and glossy) bounces followed by eye rays.
+    /// Default 8.
     pub max_specular_depth: u32,
+    /// Glossy surfaces an eye path continues through before it reads the elements as
+    /// uniform incident light ([`view`]). Default 2; 0 reads them at the first surface.
+    pub max_glossy: u32,
     /// Filtering of the element estimates.
     pub filter: Filter,
     /// Seed of the photon and camera streams. Default 0.
@@ -50,6 +55,7 @@ impl Default for DeptSettings {
             spp: 16,
             elements: 100.0,
             max_specular_depth: 8,
+            max_glossy: 2,
             filter: Filter::None,
             seed: 0,
         }
@@ -240,6 +246,7 @@ pub fn render_view(
         indirect,
         caustic,
         max_specular_depth: settings.max_specular_depth,
+        max_glossy: settings.max_glossy,
     };
     render_camera_rays(&view, scene, frame, settings.spp, settings.seed, progress)
 }

@@ -1,31 +1,44 @@
 //! Eye rays reading the element solution.
 //!
 //! Per camera sample: emission seen directly or through specular chains is added as is;
-//! delta (mirror, smooth glass) bounces are followed up to `max_specular_depth`; at the
-//! first surface with a non-delta lobe the pixel gets
+//! delta (mirror, smooth glass) bounces are followed; at a **diffuse** surface (only a
+//! Lambertian lobe besides deltas) the pixel gets
 //! - **direct light** by light sampling with the path tracer's kernel
 //!   ([`crate::kernels::direct::next_event`]: one light chosen power-proportionally, one
 //!   point on it, ray-traced shadow; every light kind; weight 1 instead of MIS because
-//!   emission is never picked up after a non-delta bounce here), and
+//!   emission is never picked up after a non-delta bounce of a diffuse surface here), and
 //! - **indirect light** from the elements: `∫ f cos · E/π dω` with `E` the interpolated
 //!   irradiance of the photons that bounced at least once (indirect + caustic fields),
 //!   i.e. incident radiance taken as uniform `E/π`; one BSDF sample estimates
-//!   `∫ f cos dω` over the non-delta lobes (exactly ρ for a Lambertian surface, so no
-//!   noise there). Glossy lobes therefore see indirect light as if it were uniform —
-//!   the usual limit of element-based density estimation.
+//!   `∫ f cos dω` (exactly ρ for a Lambertian surface, so no noise there).
+//!
+//! At a **glossy** surface (a rough specular, metal or transmission lobe with GGX
+//! α ≥ [`MIN_ALPHA`]) incident light is far from uniform — read as `E/π`, a rough-metal
+//! sphere comes out as a flat grey ball — so the path continues there as in the path
+//! tracer: next-event estimation with MIS weights, one BSDF sample of all its lobes,
+//! emission found by that ray weighted the other way, and at the next diffuse surface the
+//! reading above (its light sample and its elements). At most `max_glossy` glossy
+//! vertices are passed per path; at the last one allowed (and at the end of the chain)
+//! the elements are read as uniform again. `max_glossy = 0` is the flat reading
+//! everywhere.
 //!
 //! If the BSDF sample picks a delta lobe instead, the chain continues through it (its
 //! weight already divides by the lobe's selection probability, so the delta and the
-//! non-delta parts add up without double counting).
+//! non-delta parts add up without double counting). At most `max_specular_depth` bounces
+//! (delta and glossy) are followed.
 
 use super::element_map::ElementMesh;
 use super::reconstruct::ElementSolution;
+use super::reuse::Reach;
 use crate::integrator::RadianceEstimator;
 use crate::kernels::direct::{NeeWeight, next_event};
-use chronolux_core::bsdf::TransportMode;
+use chronolux_core::bsdf::microfacet::MIN_ALPHA;
+use chronolux_core::bsdf::{Bsdf, TransportMode};
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::{Ray, spawn_ray};
 use chronolux_core::material;
+use chronolux_core::math::Vec3;
+use chronolux_core::sampling::power_heuristic;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
@@ -38,52 +51,110 @@ pub struct DeptView<'a> {
     pub indirect: &'a ElementSolution,
     /// Irradiance of caustic photons (light → specular⁺ → surface).
     pub caustic: &'a ElementSolution,
+    /// Longest chain of delta and glossy bounces followed.
     pub max_specular_depth: u32,
+    /// Glossy vertices a path passes before the elements are read as uniform there
+    /// (0: the flat reading at every non-delta surface).
+    pub max_glossy: u32,
+}
+
+/// True when `bsdf` has a non-delta lobe other than the Lambertian one (a rough
+/// dielectric specular layer, rough metal or rough transmission).
+pub fn is_glossy(bsdf: &Bsdf) -> bool {
+    let lo = &bsdf.lobes;
+    (lo.specular_weight > 0.0 || lo.metal_weight > 0.0 || lo.transmission_weight > 0.0)
+        && lo.alpha >= MIN_ALPHA
 }
 
 impl DeptView<'_> {
-    /// One camera sample as `[direct, indirect]` when `split` (everything in `[0]`
-    /// otherwise, summed in the original order): direct = emission seen through delta
-    /// bounces and the light sample at the first non-delta surface; indirect = the
-    /// elements' term there (photons that bounced at least once, and caustic photons).
-    fn trace(
+    /// One camera sample, split with [`crate::integrator::LightSplit`]'s convention: direct = emission
+    /// seen through delta bounces, and the light arriving straight from an emitter at the
+    /// first non-delta surface (its light sample; at a glossy one also the emission its
+    /// BSDF ray hits, MIS-weighted); indirect = everything else (the elements' term, and
+    /// the light sample of a diffuse surface seen through a glossy one).
+    ///
+    /// Returned as three parts `[direct, light-sampled indirect, elements]`: the first
+    /// two are the per-pixel light (independent of the element solution, so reusable
+    /// over frames where the animation leaves the path unchanged: [`super::reuse`]), the
+    /// third the elements' term. `reach`, when given, grows by every vertex of the path
+    /// and becomes [`Reach::Unbounded`] when a ray leaves the scene (its light then
+    /// depends on everything the environment's directions pass).
+    pub fn trace_parts(
         &self,
         scene: &FrameScene,
         camera_ray: &Ray,
         sampler: &mut PixelSampler,
         stats: &mut Stats,
-        split: bool,
-    ) -> [Rgb; 2] {
-        let mut l = [Rgb::ZERO; 2];
-        let indirect = usize::from(split);
+        mut reach: Option<&mut Reach>,
+    ) -> [Rgb; 3] {
+        let mut l = [Rgb::ZERO; 3];
+        let indirect = 2;
+        // Glossy (non-delta) vertices passed so far; as the path tracer's `scattered`.
+        let mut scattered = 0u32;
+        let slot = |scattered: u32, specular_bounce: bool| -> usize {
+            usize::from(!(scattered == 0 || (scattered == 1 && !specular_bounce)))
+        };
+        if let Some(r) = reach.as_deref_mut() {
+            r.origin(camera_ray.o);
+        }
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
+        let mut specular_bounce = true;
+        let mut prev_pdf = 1.0f32;
+        let mut prev_p = Vec3::ZERO;
         for bounce in 0..=self.max_specular_depth {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray) else {
+                if let Some(r) = reach.as_deref_mut() {
+                    *r = Reach::Unbounded;
+                }
                 if let Some(env) = scene.environment {
-                    // The camera ray itself shows the backdrop.
-                    l[0] += beta
-                        * if bounce == 0 {
-                            env.background
-                        } else {
-                            env.radiance(ray.d)
+                    if bounce == 0 {
+                        // The camera ray itself shows the backdrop.
+                        l[0] += beta * env.background;
+                    } else {
+                        let w = match (specular_bounce, scene.environment_light) {
+                            (false, Some(ei)) => {
+                                let pl = scene.light_sampler.pmf(ei)
+                                    * scene.lights[ei].pdf_li(prev_p, prev_p + ray.d);
+                                power_heuristic(1.0, prev_pdf, 1.0, pl)
+                            }
+                            _ => 1.0,
                         };
+                        l[slot(scattered, specular_bounce)] += beta * env.radiance(ray.d) * w;
+                    }
                 }
                 break;
             };
             let si = scene.interaction(&hit, &ray);
+            if let Some(r) = reach.as_deref_mut() {
+                r.vertex(si.p);
+            }
             let wo = -ray.d.normalize();
-            l[0] += beta * scene.emitted(&si, wo);
+            let le = scene.emitted(&si, wo);
+            if le != Rgb::ZERO {
+                // After a glossy vertex, MIS-weighted against its light sample.
+                let w = match (specular_bounce, scene.light_of(si.tri)) {
+                    (false, Some(li)) => {
+                        let pl =
+                            scene.light_sampler.pmf(li) * scene.lights[li].pdf_li(prev_p, si.p);
+                        power_heuristic(1.0, prev_pdf, 1.0, pl)
+                    }
+                    _ => 1.0,
+                };
+                l[slot(scattered, specular_bounce)] += beta * le * w;
+            }
             let mat = &scene.materials[si.material as usize];
             let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
             let u_light = sampler.next_1d();
             let u_lp = sampler.next_2d();
             let u_lobe = sampler.next_1d();
             let u_dir = sampler.next_2d();
-            let diffuse = bsdf.has_non_delta();
-            if diffuse {
-                l[0] += next_event(
+            // Continue through this glossy surface, or read the elements here.
+            let glossy =
+                is_glossy(&bsdf) && scattered < self.max_glossy && bounce < self.max_specular_depth;
+            if bsdf.has_non_delta() {
+                l[usize::from(scattered > 0)] += next_event(
                     scene,
                     &si,
                     wo,
@@ -91,14 +162,18 @@ impl DeptView<'_> {
                     beta,
                     u_light,
                     u_lp,
-                    NeeWeight::LightOnly,
+                    if glossy {
+                        NeeWeight::Mis
+                    } else {
+                        NeeWeight::LightOnly
+                    },
                     stats,
                 );
             }
             let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
                 break;
             };
-            if !bs.is_delta {
+            if !bs.is_delta && !glossy {
                 let loc = self.mesh.locate(hit.tri, hit.b1, hit.b2);
                 let front = wo.dot(si.ng) >= 0.0;
                 let e =
@@ -110,6 +185,12 @@ impl DeptView<'_> {
             if beta == Rgb::ZERO {
                 break;
             }
+            specular_bounce = bs.is_delta;
+            if !bs.is_delta {
+                scattered += 1;
+            }
+            prev_pdf = bs.pdf;
+            prev_p = si.p;
             ray = spawn_ray(si.p, si.ng, bs.wi);
         }
         l
@@ -124,7 +205,8 @@ impl RadianceEstimator for DeptView<'_> {
         sampler: &mut PixelSampler,
         stats: &mut Stats,
     ) -> Rgb {
-        self.trace(scene, camera_ray, sampler, stats, false)[0]
+        let [d, p, e] = self.trace_parts(scene, camera_ray, sampler, stats, None);
+        d + p + e
     }
 
     fn separates_light(&self) -> bool {
@@ -138,6 +220,7 @@ impl RadianceEstimator for DeptView<'_> {
         sampler: &mut PixelSampler,
         stats: &mut Stats,
     ) -> [Rgb; 2] {
-        self.trace(scene, camera_ray, sampler, stats, true)
+        let [d, p, e] = self.trace_parts(scene, camera_ray, sampler, stats, None);
+        [d, p + e]
     }
 }

@@ -43,12 +43,18 @@
 //!    estimates' noise (a precise pooled estimate pools flat neighbourhoods and stops at
 //!    edges; below `min_photons` pooled photons the range kernel is dropped: the published
 //!    fix for noisy small elements).
-//! 5. Vertex interpolation and the eye pass are those of `dept` (direct light per pixel).
+//! 5. Vertex interpolation and the eye pass are those of `dept` (light sampled per pixel,
+//!    glossy surfaces continued to the next diffuse one, [`crate::dept::view`]), with the
+//!    per-pixel light **pooled over the last `light_history` output frames** where the
+//!    animation leaves the pixel's paths unchanged ([`crate::dept::reuse`]: from
+//!    [`chronolux_core::scene::delta::FrameDelta`], never from pixel values), so a static
+//!    pixel gets `(light_history + 1) · spp` light samples for the price of `spp`.
 //!
 //! A static scene keeps whole windows (2K + 1 frames, fewer at the ends of the render
 //! list); a change cuts the window of the elements it visibly changes at the change, on
 //! each side, so an abrupt change is not smeared into the frames before or after it.
 
+use crate::dept::assess_frame;
 use crate::dept::budget::luminances;
 use crate::dept::budget::{AutoPhotons, PhotonCount, next_total};
 use crate::dept::element_map::{
@@ -58,13 +64,15 @@ use crate::dept::reconstruct::{
     ElementSolution, Filter, Neighbours, filter_with_sigma, filtered_irradiance_sigma, prior_sq,
     range_weight,
 };
-use crate::dept::{DeptSettings, assess_frame, render_view};
-use crate::integrator::RenderedFrame;
+use crate::dept::reuse::{EyeRecord, Validity, combine, eye_pass};
+use crate::dept::view::DeptView;
+use crate::integrator::{LightSplit, RenderedFrame};
 use crate::sequence::SequenceRenderer;
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::parallel;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
+use std::sync::Arc;
 
 /// Settings of `spacetime-dept`.
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -75,12 +83,19 @@ pub struct SpacetimeSettings {
     /// Stopping rule choosing the photons of each frame from the noise of the space-time
     /// reconstruction ([`crate::dept::budget`]); `None`: `photons`.
     pub auto: Option<AutoPhotons>,
-    /// Camera samples per pixel. Default 16.
+    /// Camera samples per pixel of each frame. Default 16.
     pub spp: u32,
+    /// Past frames whose per-pixel light (the eye pass's light samples) a pixel pools
+    /// with its own where the animation leaves its paths unchanged
+    /// ([`crate::dept::reuse`]); 0: none; at most `window` is used (a farm segment has
+    /// `window` frames of context). Default 8.
+    pub light_history: u32,
     /// Target element count along the scene diagonal. Default 100.
     pub elements: f32,
     /// Longest specular chain of eye rays. Default 8.
     pub max_specular_depth: u32,
+    /// Glossy surfaces an eye path continues through (as `dept`'s). Default 2.
+    pub max_glossy: u32,
     /// Frames on each side of the output frame (K: the window has at most 2K + 1
     /// frames; frame f is output once frame f + K is traced). Default 8.
     /// (`RUST_LOG=chronolux_render=debug` prints the windows' power-weighted mean length.)
@@ -114,8 +129,10 @@ impl Default for SpacetimeSettings {
             photons: 100_000,
             auto: None,
             spp: 16,
+            light_history: 8,
             elements: 100.0,
             max_specular_depth: 8,
+            max_glossy: 2,
             window: 8,
             temporal_sigma: 8.0,
             change_threshold: 3.0,
@@ -335,6 +352,8 @@ pub struct SpacetimeDept {
     mesh: Option<ElementMesh>,
     /// Traced frames of the current window, increasing.
     frames: Vec<Traced>,
+    /// Output frames of the last `light_history` frames: scene and eye pass, increasing.
+    history: Vec<(u32, Arc<FrameScene>, EyeRecord)>,
     last_output: Option<u32>,
     last_photons: Option<u64>,
     /// The last frame's windows and solution.
@@ -347,21 +366,10 @@ impl SpacetimeDept {
             settings,
             mesh: None,
             frames: Vec::new(),
+            history: Vec::new(),
             last_output: None,
             last_photons: None,
             info: None,
-        }
-    }
-
-    fn dept_settings(&self) -> DeptSettings {
-        let s = &self.settings;
-        DeptSettings {
-            photons: s.photons,
-            spp: s.spp,
-            elements: s.elements,
-            max_specular_depth: s.max_specular_depth,
-            seed: s.seed,
-            ..Default::default()
         }
     }
 
@@ -481,7 +489,7 @@ impl SpacetimeDept {
 
     /// Traces the frames of `frame`'s window that are not traced yet, and forgets the
     /// frames that left it.
-    fn trace_window(&mut self, source: &mut FrameSource, frame: u32, scene: &FrameScene) {
+    fn trace_window(&mut self, source: &mut FrameSource, frame: u32, scene: &Arc<FrameScene>) {
         let s = self.settings.clone();
         let window = source.window(frame, s.window, s.window);
         self.frames.retain(|t| window.contains(&t.frame));
@@ -491,11 +499,11 @@ impl SpacetimeDept {
                 continue;
             }
             let sg = if g == frame {
-                None
+                scene.clone()
             } else {
-                Some(source.frame(g))
+                source.frame(g)
             };
-            let sc = sg.as_deref().unwrap_or(scene);
+            let sc = &*sg;
             // A frame whose topology differs cannot share element ids: left out.
             if !mesh.matches(sc) {
                 continue;
@@ -531,8 +539,8 @@ impl SequenceRenderer for SpacetimeDept {
         let s = self.settings.clone();
         // The output frame's scene stays cached while the look-ahead builds K more.
         source.reserve(s.window as usize + 2);
-        let scene = source.frame(frame);
-        let scene = &*scene;
+        let scene_arc = source.frame(frame);
+        let scene = &*scene_arc;
         if !self.mesh.as_ref().is_some_and(|m| m.matches(scene)) {
             self.mesh = Some(ElementMesh::build(scene, s.elements));
             self.frames.clear();
@@ -540,9 +548,14 @@ impl SequenceRenderer for SpacetimeDept {
         // Frames must arrive in increasing order; a jump back restarts.
         if self.last_output.is_some_and(|l| l >= frame) {
             self.frames.clear();
+            self.history.clear();
         }
         self.last_output = Some(frame);
-        self.trace_window(source, frame, scene);
+        // Wall-clock phases for `RUST_LOG=chronolux_render=debug` (a profile, not a
+        // benchmark: see BENCHMARKS.md for CPU seconds).
+        let t0 = std::time::Instant::now();
+        self.trace_window(source, frame, &scene_arc);
+        let t_trace = t0.elapsed();
         let mesh = self.mesh.take().expect("mesh");
         let fe = FrameElements::new(scene, &mesh);
         let c = self
@@ -551,6 +564,7 @@ impl SequenceRenderer for SpacetimeDept {
             .position(|t| t.frame == frame)
             .expect("output frame traced");
         let nb = Neighbours::new(&fe, s.radius * mesh.element_size);
+        let t0 = std::time::Instant::now();
         let (ind, cau, window) = loop {
             let (pi, pc, window) = self.pool(c);
             let cur = &self.frames[c].photons;
@@ -617,18 +631,75 @@ impl SequenceRenderer for SpacetimeDept {
         });
         let indirect = ElementSolution::from_elements(&mesh, &fe, &ind);
         let caustic = ElementSolution::from_elements(&mesh, &fe, &cau);
-        let mut img = render_view(
-            &self.dept_settings(),
-            scene,
-            frame,
-            &mesh,
-            &indirect,
-            &caustic,
-            progress,
+        let view = DeptView {
+            mesh: &mesh,
+            indirect: &indirect,
+            caustic: &caustic,
+            max_specular_depth: s.max_specular_depth,
+            max_glossy: s.max_glossy,
+        };
+        let t_pool = t0.elapsed();
+        let t0 = std::time::Instant::now();
+        let eye = eye_pass(&view, scene, frame, s.spp, s.seed, progress);
+        let t_eye = t0.elapsed();
+        // Per-pixel light of the past frames within `light_history` (at most `window`, so
+        // that a farm segment's context of `window` frames holds them all).
+        let history = s.light_history.min(s.window);
+        self.history
+            .retain(|(g, _, _)| *g < frame && g + history >= frame);
+        // Frames of the render list in that range that were not output here (a farm
+        // segment's context): their eye pass, as a single run over the range made it.
+        // The per-pixel light and the reach do not depend on the element solution (only
+        // the elements' term, which is not reused, does), so `view` serves any frame.
+        if history > 0 {
+            for g in source.window(frame, history, 0) {
+                if g >= frame || self.history.iter().any(|(h, _, _)| *h == g) {
+                    continue;
+                }
+                let sg = source.frame(g);
+                if !mesh.matches(&sg) {
+                    continue;
+                }
+                let e = eye_pass(&view, &sg, g, s.spp, s.seed, &|_| {});
+                let at = self.history.partition_point(|(h, _, _)| *h < g);
+                self.history.insert(at, (g, sg, e));
+            }
+        }
+        let past: Vec<(&EyeRecord, Validity)> = self
+            .history
+            .iter()
+            .map(|(_, sc, e)| (e, Validity::between(sc, scene)))
+            .collect();
+        let (parts, variance, pooled) = combine(&eye, &past);
+        log::debug!(
+            "spacetime-dept frame {frame}: photons {:.3} s, pooling and filtering {:.3} s, eye pass {:.3} s, light reuse {:.3} s (wall)",
+            t_trace.as_secs_f64(),
+            t_pool.as_secs_f64(),
+            t_eye.as_secs_f64(),
+            (t0.elapsed() - t_eye).as_secs_f64()
         );
-        img.stats.rays += photon_rays;
+        let (direct, indirect): (Vec<Rgb>, Vec<Rgb>) = parts.iter().map(|[d, i]| (*d, *i)).unzip();
+        let mut stats = eye.stats;
+        stats.rays += photon_rays;
+        let mut img = RenderedFrame {
+            width: eye.width,
+            height: eye.height,
+            pixels: parts.iter().map(|[d, i]| *d + *i).collect(),
+            variance,
+            stats,
+            invalid_samples: eye.invalid_samples,
+            report: Default::default(),
+            light: Some(LightSplit { direct, indirect }),
+        };
         if let Some(p) = self.last_photons {
             img.report.insert("photons".into(), p.into());
+        }
+        // Mean camera samples of per-pixel light pooled per pixel (spp: no reuse).
+        let mean_pooled =
+            pooled.iter().map(|&m| m as f64).sum::<f64>() / pooled.len().max(1) as f64;
+        img.report.insert("light_spp".into(), mean_pooled.into());
+        if history > 0 {
+            self.history.push((frame, scene_arc.clone(), eye));
         }
         self.mesh = Some(mesh);
         img

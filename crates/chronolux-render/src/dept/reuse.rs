@@ -1,0 +1,357 @@
+//! The eye pass with its per-pixel light kept, and that light reused over past frames
+//! where the animation leaves a pixel's paths unchanged.
+//!
+//! The eye pass of [`super::view`] splits every camera sample into the per-pixel light
+//! (emission seen through delta bounces and the light samples of the path: independent of
+//! the element solution) and the elements' term. [`eye_pass`] keeps, per pixel, the sums
+//! of both and the **reach** of its paths: the bounds of their ray origins and of their
+//! vertices ([`Reach`]). In a later frame `f`, the light of a past frame `g` is pooled with
+//! `f`'s own where nothing that differs between `g` and `f` can touch those paths, decided
+//! from the animation alone ([`FrameDelta`], never from pixel values) by
+//! [`Validity::between`]:
+//! - the camera, the lights, the materials and the scene bounds are the same in `g` and
+//!   `f` (otherwise no pixel of `g` is used);
+//! - the world bounds of every instance that moved or deformed between `g` and `f`, in both
+//!   frames, stay clear of the region the pixel's light depends on: the segments from its
+//!   ray origins to its vertices (delta chains included) and the shadow rays from its
+//!   vertices to any point of any light. That region is inside two capsules — origins box
+//!   to vertex box, vertex box to the lights' box, each with the larger of its two boxes'
+//!   bounding radii — and a changed instance is inside a ball; a pixel is refused when a
+//!   ball touches a capsule (conservative: it refuses more than the exact test would).
+//!
+//! The region is that of the pixel's samples in **both** frames (the union of their
+//! reaches): `g`'s own paths, traced in `g`, avoid everything that differs in `f`, so each
+//! of them has the same value in `f`; `f`'s paths avoiding it too makes it unlikely that
+//! the pixel has paths through a changed object that neither frame's samples found (a
+//! bias only then: at most the chance `(1 − q)^(2·spp)` that both frames' samples miss
+//! a part `q` of the pixel's paths, times that part's difference).
+//!
+//! Glossy continuations grow the box like delta chains: how a pixel's glossy paths
+//! spread is sampled by both frames' samples, and a box touched by an object that moves
+//! refuses the whole pixel, so which samples are pooled does not depend on where each
+//! one went (a test per sample would pool exactly the samples that missed the object,
+//! a biased selection). Unbounded paths (a ray leaving the scene; lights at infinity)
+//! are reused only when no instance changed.
+
+use super::view::DeptView;
+use chronolux_core::color::Rgb;
+use chronolux_core::geometry::Bounds3;
+use chronolux_core::light::Light;
+use chronolux_core::math::{Vec2, Vec3};
+use chronolux_core::parallel;
+use chronolux_core::sampling::sampler::PixelSampler;
+use chronolux_core::scene::delta::FrameDelta;
+use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::stats::Stats;
+
+/// Where the light of a pixel's paths comes from: bounds of their ray origins and of
+/// their vertices, or unbounded.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Reach {
+    Bounded { origins: Bounds3, vertices: Bounds3 },
+    Unbounded,
+}
+
+impl Default for Reach {
+    fn default() -> Self {
+        Reach::Bounded {
+            origins: Bounds3::EMPTY,
+            vertices: Bounds3::EMPTY,
+        }
+    }
+}
+
+impl Reach {
+    /// Adds a camera ray's origin.
+    pub fn origin(&mut self, p: Vec3) {
+        if let Reach::Bounded { origins, .. } = self {
+            origins.grow(p);
+        }
+    }
+
+    /// Both reaches: bounded when both are, by the union of their boxes.
+    pub fn union(&self, o: &Reach) -> Reach {
+        match (self, o) {
+            (
+                Reach::Bounded { origins, vertices },
+                Reach::Bounded {
+                    origins: o2,
+                    vertices: v2,
+                },
+            ) => Reach::Bounded {
+                origins: origins.union(o2),
+                vertices: vertices.union(v2),
+            },
+            _ => Reach::Unbounded,
+        }
+    }
+
+    /// Adds a path vertex.
+    pub fn vertex(&mut self, p: Vec3) {
+        if let Reach::Bounded { vertices, .. } = self {
+            vertices.grow(p);
+        }
+    }
+}
+
+/// One frame's eye pass, per pixel (row-major): sums over its `spp` samples.
+#[derive(Clone, Debug)]
+pub struct EyeRecord {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    /// Σ direct light ([`crate::integrator::LightSplit`]'s convention).
+    pub direct: Vec<Rgb>,
+    /// Σ light-sampled indirect light (light samples of diffuse surfaces seen through
+    /// glossy ones).
+    pub path: Vec<Rgb>,
+    /// Σ the elements' term.
+    pub elements: Vec<Rgb>,
+    /// Σ (sample value)², per channel, of the whole sample.
+    pub sq: Vec<Rgb>,
+    pub reach: Vec<Reach>,
+    pub stats: Stats,
+    pub invalid_samples: u64,
+}
+
+/// The eye pass of `view` over `scene` with `spp` samples per pixel from the streams of
+/// (`seed`, `frame`, pixel), as [`crate::integrator::render_camera_rays`] draws them.
+pub fn eye_pass(
+    view: &DeptView,
+    scene: &FrameScene,
+    frame: u32,
+    spp: u32,
+    seed: u64,
+    progress: &(dyn Fn(u64) + Sync),
+) -> EyeRecord {
+    let (w, h) = (scene.camera.width, scene.camera.height);
+    let rows = parallel::map_chunks(h as usize, 1, |range| {
+        let mut out = Vec::with_capacity(range.len() * w as usize);
+        let mut stats = Stats::default();
+        let mut invalid = 0u64;
+        for py in range {
+            for px in 0..w {
+                let mut sampler = PixelSampler::new(seed, frame, px, py as u32);
+                let mut reach = Reach::default();
+                let mut sums = [Rgb::ZERO; 4];
+                for s in 0..spp {
+                    sampler.start_sample(s);
+                    let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
+                    let ray = scene.camera.generate_ray(raster);
+                    let parts =
+                        view.trace_parts(scene, &ray, &mut sampler, &mut stats, Some(&mut reach));
+                    stats.samples += 1;
+                    let l = parts[0] + parts[1] + parts[2];
+                    if !l.is_finite() {
+                        invalid += 1;
+                        continue;
+                    }
+                    for (acc, v) in sums.iter_mut().zip(parts) {
+                        *acc += v;
+                    }
+                    sums[3] += l * l;
+                }
+                out.push((sums, reach));
+            }
+            progress(w as u64);
+        }
+        (out, stats, invalid)
+    });
+    let n = (w * h) as usize;
+    let mut rec = EyeRecord {
+        width: w,
+        height: h,
+        spp,
+        direct: Vec::with_capacity(n),
+        path: Vec::with_capacity(n),
+        elements: Vec::with_capacity(n),
+        sq: Vec::with_capacity(n),
+        reach: Vec::with_capacity(n),
+        stats: Stats::default(),
+        invalid_samples: 0,
+    };
+    for (px, stats, invalid) in rows {
+        for ([d, p, e, q], r) in px {
+            rec.direct.push(d);
+            rec.path.push(p);
+            rec.elements.push(e);
+            rec.sq.push(q);
+            rec.reach.push(r);
+        }
+        rec.stats += stats;
+        rec.invalid_samples += invalid;
+    }
+    rec
+}
+
+/// A ball (centre, radius) around a box; `None` for an empty box.
+fn ball(b: &Bounds3) -> Option<(Vec3, f32)> {
+    (!b.is_empty()).then(|| (b.center(), 0.5 * b.diagonal().length()))
+}
+
+/// Distance from `p` to the segment `a`–`b`.
+fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 {
+        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (a + ab * t - p).length()
+}
+
+/// Whether a past frame's per-pixel light may be pooled with the current frame's.
+#[derive(Clone, Debug)]
+pub enum Validity {
+    /// Nothing that paths can see changed: every pixel.
+    All,
+    /// The camera, a light, a material or the scene bounds changed: no pixel.
+    None,
+    /// Balls around the instances that changed (bounds in both frames): pixels whose
+    /// bounded reach stays clear of them. `lights`: a ball around every light, `None` when
+    /// a light is at infinity (then only unchanged scenes are reused).
+    Clear {
+        changed: Vec<(Vec3, f32)>,
+        lights: Option<(Vec3, f32)>,
+    },
+}
+
+impl Validity {
+    /// From the animation: frames `past` and `current` of one builder.
+    pub fn between(past: &FrameScene, current: &FrameScene) -> Validity {
+        let d = FrameDelta::between(past, current);
+        if d.camera_changed() || d.lights_changed() || d.materials_changed() || d.bounds_changed() {
+            return Validity::None;
+        }
+        if d.is_static() {
+            return Validity::All;
+        }
+        let mut changed = Vec::new();
+        for scene in [past, current] {
+            changed.extend(
+                crate::spt::pool::changed_instance_bounds(scene, &d)
+                    .iter()
+                    .filter_map(ball),
+            );
+        }
+        Validity::Clear {
+            changed,
+            lights: light_ball(current),
+        }
+    }
+
+    /// Pixel with `reach` may pool the past frame's light.
+    pub fn allows(&self, reach: &Reach) -> bool {
+        match self {
+            Validity::All => true,
+            Validity::None => false,
+            Validity::Clear { changed, lights } => {
+                let (Reach::Bounded { origins, vertices }, Some((cl, rl))) = (reach, lights) else {
+                    return false;
+                };
+                let (Some((co, ro)), Some((cv, rv))) = (ball(origins), ball(vertices)) else {
+                    return false;
+                };
+                changed.iter().all(|&(c, r)| {
+                    segment_distance(c, co, cv) > r + ro.max(rv)
+                        && segment_distance(c, cv, *cl) > r + rv.max(*rl)
+                })
+            }
+        }
+    }
+}
+
+/// A ball around every light of `scene`; `None` when one is at infinity.
+fn light_ball(scene: &FrameScene) -> Option<(Vec3, f32)> {
+    let mut b = Bounds3::EMPTY;
+    for l in scene.lights.iter() {
+        match l {
+            Light::Point { p, .. } | Light::Spot { p, .. } => b.grow(*p),
+            Light::Triangle { p0, e1, e2, .. } => {
+                b.grow(*p0);
+                b.grow(*p0 + *e1);
+                b.grow(*p0 + *e2);
+            }
+            Light::Directional { .. } | Light::Environment { .. } => return None,
+        }
+    }
+    ball(&b)
+}
+
+/// The combined frame: per pixel, the current frame's elements' term plus its per-pixel
+/// light pooled (by sample count) with that of every past record whose [`Validity`]
+/// allows the pixel. Returns `[direct, indirect]` per pixel, the variance of the current
+/// frame's own mean (an upper bound for the pooled one) and, per pixel, the samples of
+/// light pooled.
+pub fn combine(
+    current: &EyeRecord,
+    past: &[(&EyeRecord, Validity)],
+) -> (Vec<[Rgb; 2]>, Vec<Rgb>, Vec<u32>) {
+    let n = current.direct.len();
+    let mut out = Vec::with_capacity(n);
+    let mut var = Vec::with_capacity(n);
+    let mut pooled = Vec::with_capacity(n);
+    let inv = 1.0 / current.spp.max(1) as f32;
+    for i in 0..n {
+        let (mut d, mut p, mut m) = (current.direct[i], current.path[i], current.spp);
+        for (rec, v) in past {
+            if rec.direct.len() == n && v.allows(&current.reach[i].union(&rec.reach[i])) {
+                d += rec.direct[i];
+                p += rec.path[i];
+                m += rec.spp;
+            }
+        }
+        let k = 1.0 / m.max(1) as f32;
+        out.push([d * k, p * k + current.elements[i] * inv]);
+        let mean = (current.direct[i] + current.path[i] + current.elements[i]) * inv;
+        let v = (current.sq[i] * inv - mean * mean).max(Rgb::ZERO);
+        var.push(v * (1.0 / (current.spp.max(2) - 1) as f32));
+        pooled.push(m);
+    }
+    (out, var, pooled)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn bounded(o: Vec3, v: &[Vec3]) -> Reach {
+        let mut r = Reach::default();
+        r.origin(o);
+        for p in v {
+            r.vertex(*p);
+        }
+        r
+    }
+
+    #[test]
+    fn a_change_away_from_the_paths_keeps_the_pixel_and_one_on_them_refuses_it() {
+        // Camera at the origin, a floor point at (0, −1, −5), a lamp at (0, 3, −5).
+        let reach = bounded(Vec3::ZERO, &[Vec3::new(0.0, -1.0, -5.0)]);
+        let lights = Some((Vec3::new(0.0, 3.0, -5.0), 0.1));
+        let far = Validity::Clear {
+            changed: vec![(Vec3::new(5.0, -1.0, -5.0), 0.5)],
+            lights,
+        };
+        assert!(far.allows(&reach));
+        // On the shadow ray (floor → lamp) and on the camera ray.
+        for c in [Vec3::new(0.2, 1.0, -5.0), Vec3::new(0.0, -0.5, -2.5)] {
+            let v = Validity::Clear {
+                changed: vec![(c, 0.3)],
+                lights,
+            };
+            assert!(!v.allows(&reach), "{c}");
+        }
+        assert!(!far.allows(&Reach::Unbounded));
+        assert!(Validity::All.allows(&Reach::Unbounded));
+        assert!(!Validity::None.allows(&reach));
+    }
+
+    #[test]
+    fn segment_distance_is_euclidean() {
+        let (a, b) = (Vec3::ZERO, Vec3::new(2.0, 0.0, 0.0));
+        assert_eq!(segment_distance(Vec3::new(1.0, 1.0, 0.0), a, b), 1.0);
+        assert_eq!(segment_distance(Vec3::new(-3.0, 4.0, 0.0), a, b), 5.0);
+        assert_eq!(segment_distance(Vec3::new(2.0, 0.0, 0.0), a, a), 2.0);
+    }
+}

@@ -91,7 +91,6 @@ use super::{
     PmIcSettings, base_cell, caustic_seed, extend_cache, gather_at, point_key, probe_points,
     world_radius,
 };
-use crate::dept::element_map::geometry_transforms;
 use crate::integrator::{RenderedFrame, render_camera_rays};
 use crate::kernels::photon::{PhotonHit, trace_photon_path};
 use crate::spt::pool::segment_hits_box;
@@ -324,30 +323,7 @@ fn trace_list(
 
 /// World bounds of the instances `dynamic` marks, in `scene` (slightly padded).
 pub fn dynamic_bounds(scene: &FrameScene, dynamic: &[bool]) -> Vec<Bounds3> {
-    let xf = geometry_transforms(scene);
-    let mut boxes: Vec<Option<Bounds3>> = vec![None; dynamic.len()];
-    for (g, geo) in scene.geometry.iter().enumerate() {
-        let i = scene.geometry_instance[g] as usize;
-        if !dynamic.get(i).copied().unwrap_or(false) {
-            continue;
-        }
-        for p in geo.positions.iter() {
-            let q = xf[g].transform_point3(*p);
-            let b = Bounds3 { min: q, max: q };
-            boxes[i] = Some(boxes[i].map_or(b, |o| o.union(&b)));
-        }
-    }
-    boxes
-        .into_iter()
-        .flatten()
-        .map(|b| {
-            let pad = 1e-4 * (b.max - b.min).length().max(1e-3);
-            Bounds3 {
-                min: b.min - Vec3::splat(pad),
-                max: b.max + Vec3::splat(pad),
-            }
-        })
-        .collect()
+    crate::dept::element_map::instance_world_bounds(scene, dynamic.len(), |i| dynamic[i])
 }
 
 /// The photons of a frame that must be re-traced: those (of the segment's candidates)

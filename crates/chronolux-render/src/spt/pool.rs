@@ -3,9 +3,7 @@
 
 use super::groups::{GroupLayout, used_dims};
 use super::{Order, SptSettings};
-use crate::dept::element_map::{
-    ElementAccumulators, ElementMesh, FrameElements, geometry_transforms, slot,
-};
+use crate::dept::element_map::{ElementAccumulators, ElementMesh, FrameElements, slot};
 use crate::kernels::photon::{PhotonStats, trace_photon_path};
 use chronolux_core::accel::TriRef;
 use chronolux_core::color::{Rgb, luminance};
@@ -188,34 +186,9 @@ pub fn segment_hits_box(o: Vec3, d: Vec3, t_max: f32, b: &Bounds3) -> bool {
 
 /// World bounds, in `scene`, of every instance `changed` says changed (slightly padded).
 pub fn changed_instance_bounds(scene: &FrameScene, changes: &FrameDelta) -> Vec<Bounds3> {
-    let xf = geometry_transforms(scene);
-    let n = scene.accel.instances().len();
-    let mut boxes: Vec<Option<Bounds3>> = vec![None; n];
-    for (g, geo) in scene.geometry.iter().enumerate() {
-        let i = scene.geometry_instance[g] as usize;
-        if i >= n || !changes.instance_changed(i) {
-            continue;
-        }
-        for p in geo.positions.iter() {
-            let q = xf[g].transform_point3(*p);
-            let b = Bounds3 { min: q, max: q };
-            boxes[i] = Some(match boxes[i] {
-                None => b,
-                Some(o) => o.union(&b),
-            });
-        }
-    }
-    boxes
-        .into_iter()
-        .flatten()
-        .map(|b| {
-            let pad = 1e-4 * (b.max - b.min).length().max(1e-3);
-            Bounds3 {
-                min: b.min - Vec3::splat(pad),
-                max: b.max + Vec3::splat(pad),
-            }
-        })
-        .collect()
+    crate::dept::element_map::instance_world_bounds(scene, scene.accel.instances().len(), |i| {
+        changes.instance_changed(i)
+    })
 }
 
 /// Traces photons `indices` in parallel; records in the order of `indices`.

@@ -33,9 +33,17 @@ pub fn denoise(pixels: &[Rgb], aovs: &Aovs) -> Result<Vec<Rgb>, String> {
     let albedo = flat3(aovs.albedo.iter().map(|p| [p.x, p.y, p.z]));
     let normal = flat3(aovs.normal.iter().map(|n| [n.x, n.y, n.z]));
     let mut out = vec![0.0f32; color.len()];
-    let device = oidn::Device::new().map_err(|e| format!("Open Image Denoise: {e:?}"))?;
+    // One device for the process: creating one per frame re-initialises OIDN every frame.
+    // `Device` is `Send` but not `Sync`, so it lives behind a mutex (frames are denoised
+    // one at a time anyway; OIDN threads inside the filter).
+    static DEVICE: std::sync::Mutex<Option<oidn::Device>> = std::sync::Mutex::new(None);
+    let mut slot = DEVICE.lock().unwrap_or_else(|e| e.into_inner());
+    if slot.is_none() {
+        *slot = Some(oidn::Device::new().map_err(|e| format!("Open Image Denoise: {e:?}"))?);
+    }
+    let device = slot.as_ref().expect("just set");
     let mut filter =
-        oidn::RayTracing::try_new(&device).map_err(|e| format!("Open Image Denoise: {e:?}"))?;
+        oidn::RayTracing::try_new(device).map_err(|e| format!("Open Image Denoise: {e:?}"))?;
     filter
         .hdr(true)
         .image_dimensions(w, h)

@@ -21,8 +21,9 @@
 //! key (for the demo, the block jumps from the left to the right of the room); `occluder`:
 //! a white block (0.5 × 0.1 × 0.5) appears 0.45 below the stage's ceiling light (it waits
 //! under the floor in A); `light`: the stage's ceiling light moves 0.3 along x. The
-//! occluder and the moved light are rigid nodes in both configurations (a constant
-//! animation channel), so A and B have the same instances and elements.
+//! occluder and the moved light are built as movable nodes in both configurations
+//! ([`FrameBuilder::with_movable`]: their own instances, not the static geometry), so A
+//! and B have the same instances and elements and [`FrameDelta`] reports only them.
 
 use crate::cli::SceneArgs;
 use crate::scene_input;
@@ -31,8 +32,7 @@ use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::math::Vec3;
 use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::desc::{
-    Animation, AnimationId, Channel, ChannelTarget, Interpolation, Material, MaterialId, Mesh,
-    MeshId, Node, NodeId, Primitive, SceneDesc, Trs,
+    AnimationId, Material, MaterialId, Mesh, MeshId, Node, NodeId, Primitive, SceneDesc, Trs,
 };
 use chronolux_core::scene::frame::{FrameBuilder, FrameScene};
 use chronolux_core::scene::stage::{ROOM_HALF, cube_primitive};
@@ -77,8 +77,7 @@ pub struct UpdateArgs {
     pub json: bool,
 }
 
-/// A unit quad-free helper: node `name` with `prim` and a constant STEP translation
-/// channel in animation 0 (created if absent), so the node is a rigid instance.
+/// Adds root node `name` with `prim` (made movable by [`configurations`]).
 fn push_rigid(
     d: &mut SceneDesc,
     name: &str,
@@ -103,26 +102,7 @@ fn push_rigid(
         ..Default::default()
     });
     d.roots.push(node);
-    pin(d, node, trs.translation);
     node
-}
-
-/// Adds a constant STEP translation channel for `node` to animation 0.
-fn pin(d: &mut SceneDesc, node: NodeId, t: Vec3) {
-    if d.animations.is_empty() {
-        d.animations.push(Animation {
-            name: "bench-update".into(),
-            channels: Vec::new(),
-        });
-    }
-    d.animations[0].channels.push(Channel {
-        node,
-        target: ChannelTarget::Translation,
-        interpolation: Interpolation::Step,
-        times: vec![0.0],
-        values: vec![t.x, t.y, t.z],
-        components: 3,
-    });
 }
 
 /// Configurations A and B of `change` at the camera and animation of `input`.
@@ -130,10 +110,19 @@ fn configurations(
     input: &scene_input::SceneInput,
     change: &str,
 ) -> Result<(FrameScene, FrameScene, String)> {
-    let build = |desc: SceneDesc, t: f32| -> Result<FrameScene> {
+    // Nodes named in `movable` are their own instances in both configurations (a node
+    // the clip leaves still would otherwise join the static geometry, and the change
+    // would read as a change of everything).
+    let build = |desc: SceneDesc, t: f32, movable: &[&str]| -> Result<FrameScene> {
         let anim =
             (!desc.animations.is_empty()).then_some(input.animation.unwrap_or(AnimationId(0)));
-        let mut b = FrameBuilder::new(Arc::new(desc), anim, input.camera.clone(), 64, 64)?;
+        let mask: Vec<bool> = desc
+            .nodes
+            .iter()
+            .map(|n| movable.contains(&n.name.as_str()))
+            .collect();
+        let mut b =
+            FrameBuilder::with_movable(Arc::new(desc), anim, input.camera.clone(), 64, 64, &mask)?;
         Ok(b.build(t))
     };
     match change {
@@ -148,8 +137,8 @@ fn configurations(
                 bail!("--change jump: the animation has no extent");
             }
             Ok((
-                build(input.desc.clone(), 0.0)?,
-                build(input.desc.clone(), t1)?,
+                build(input.desc.clone(), 0.0, &[])?,
+                build(input.desc.clone(), t1, &[])?,
                 format!("first pose (t = 0) → last key (t = {t1} s)"),
             ))
         }
@@ -173,8 +162,8 @@ fn configurations(
                 d
             };
             Ok((
-                build(with(-0.5 * ROOM_HALF), 0.0)?,
-                build(with(1.45 * ROOM_HALF), 0.0)?,
+                build(with(-0.5 * ROOM_HALF), 0.0, &["bench_occluder"])?,
+                build(with(1.45 * ROOM_HALF), 0.0, &["bench_occluder"])?,
                 "a 0.5 × 0.1 × 0.5 block appears 0.45 below the ceiling light".into(),
             ))
         }
@@ -187,13 +176,11 @@ fn configurations(
                     .position(|n| n.name == "ceiling_light")
                     .context("--change light needs the stage's `ceiling_light` (the demo, or --stage cornell)")?;
                 d.nodes[n].transform.translation.x += dx;
-                let t = d.nodes[n].transform.translation;
-                pin(&mut d, NodeId(n as u32), t);
                 Ok(d)
             };
             Ok((
-                build(with(0.0)?, 0.0)?,
-                build(with(0.3 * ROOM_HALF)?, 0.0)?,
+                build(with(0.0)?, 0.0, &["ceiling_light"])?,
+                build(with(0.3 * ROOM_HALF)?, 0.0, &["ceiling_light"])?,
                 "the ceiling light moves 0.3 along x".into(),
             ))
         }

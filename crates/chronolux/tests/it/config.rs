@@ -258,3 +258,38 @@ fn bench_quality_measures_a_subset_of_the_rendered_frames() {
         &["--measure", "7"],
     );
 }
+
+/// `bench update --change occluder`: the block that appears under the lamp is its own
+/// instance in both configurations, so the update invalidates only the photon groups whose
+/// paths meet it (found by the pilots and the path scan), not the whole pool. The block
+/// covers part of the lamp's downward hemisphere only, so some groups must stay valid:
+/// with the block read as static geometry (the bug this guards) every group is invalid.
+#[test]
+fn bench_update_occluder_invalidates_only_the_groups_it_touches() {
+    let out = run([
+        "bench",
+        "update",
+        "--change",
+        "occluder",
+        "--photons",
+        "20000",
+        "--ref-factor",
+        "1",
+        "--threads",
+        "2",
+        "--json",
+    ]);
+    ok(&out);
+    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let groups = j["groups"].as_u64().unwrap();
+    let p = &j["orders"]["priority"];
+    let invalid = p["groups_invalidated"].as_u64().unwrap();
+    assert!(
+        invalid > 0 && invalid < groups,
+        "{invalid} of {groups}: {j}"
+    );
+    assert_eq!(
+        j["orders"]["scratch"]["groups_invalidated"].as_u64(),
+        Some(groups)
+    );
+}

@@ -193,29 +193,28 @@ impl PhotonMap {
         &self.photons
     }
 
-    /// `Σ g(photon) w / (norm r²)` over the accepted photons around `x` (normal `n`),
-    /// `r_max` in world units.
-    pub fn estimate(
+    /// The k-nearest gather shared by the estimates: visits every photon within `r_max`
+    /// of `x` among the `lookup.k` nearest that arrived on the side of `n` (`wi · n > 0`)
+    /// on a surface facing the same way (`n_photon · n ≥ 0.5`) with its filter weight, and
+    /// returns the kernel's area `norm · r²` (r² the k-th distance², or `r_max²` when
+    /// fewer than k were found); `None` when nothing was found.
+    fn gather(
         &self,
         x: Vec3,
         n: Vec3,
         lookup: &Lookup,
         r_max: f32,
-        g: impl Fn(&StoredPhoton) -> Rgb,
-    ) -> Rgb {
-        let Some(tree) = &self.tree else {
-            return Rgb::ZERO;
-        };
-        let Some(k) = NonZero::new(lookup.k.max(1) as usize) else {
-            return Rgb::ZERO;
-        };
+        mut visit: impl FnMut(&StoredPhoton, f32),
+    ) -> Option<f32> {
+        let tree = self.tree.as_ref()?;
+        let k = NonZero::new(lookup.k.max(1) as usize).expect("k ≥ 1");
         let found = tree
             .query(&x.to_array())
             .nearest_n::<SquaredEuclidean<f32>>(k)
             .within(r_max * r_max)
             .execute();
         if found.is_empty() {
-            return Rgb::ZERO;
+            return None;
         }
         let r2 = if found.len() >= k.get() {
             found
@@ -226,18 +225,33 @@ impl PhotonMap {
         } else {
             r_max * r_max
         };
-        let mut sum = Rgb::ZERO;
         for f in &found {
             let ph = &self.photons[f.item as usize];
             if ph.wi.dot(n) <= 0.0 || ph.n.dot(n) < 0.5 {
                 continue;
             }
-            let w = lookup.filter.weight(f.distance, r2);
+            visit(ph, lookup.filter.weight(f.distance, r2));
+        }
+        Some(lookup.filter.norm() * r2)
+    }
+
+    /// `Σ g(photon) w / (norm r²)` over the accepted photons around `x` (normal `n`),
+    /// `r_max` in world units.
+    pub fn estimate(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        lookup: &Lookup,
+        r_max: f32,
+        g: impl Fn(&StoredPhoton) -> Rgb,
+    ) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        let area = self.gather(x, n, lookup, r_max, |ph, w| {
             if w > 0.0 {
                 sum += g(ph) * (ph.flux * w);
             }
-        }
-        sum / (lookup.filter.norm() * r2)
+        });
+        area.map_or(Rgb::ZERO, |a| sum / a)
     }
 
     /// Luminance of the (signed) irradiance estimate at `x` and an upper bound of its
@@ -250,40 +264,13 @@ impl PhotonMap {
         lookup: &Lookup,
         r_max: f32,
     ) -> (f32, f32) {
-        let Some(tree) = &self.tree else {
-            return (0.0, 0.0);
-        };
-        let k = NonZero::new(lookup.k.max(1) as usize).expect("k ≥ 1");
-        let found = tree
-            .query(&x.to_array())
-            .nearest_n::<SquaredEuclidean<f32>>(k)
-            .within(r_max * r_max)
-            .execute();
-        if found.is_empty() {
-            return (0.0, 0.0);
-        }
-        let r2 = if found.len() >= k.get() {
-            found
-                .iter()
-                .map(|f| f.distance)
-                .fold(0.0f32, f32::max)
-                .max(1e-12)
-        } else {
-            r_max * r_max
-        };
         let (mut sum, mut sq) = (0.0f32, 0.0f32);
-        for f in &found {
-            let ph = &self.photons[f.item as usize];
-            if ph.wi.dot(n) <= 0.0 || ph.n.dot(n) < 0.5 {
-                continue;
-            }
-            let w = lookup.filter.weight(f.distance, r2);
+        let area = self.gather(x, n, lookup, r_max, |ph, w| {
             let l = luminance(ph.flux);
             sum += l * w;
             sq += l * l * w;
-        }
-        let a = lookup.filter.norm() * r2;
-        (sum / a, sq.sqrt() / a)
+        });
+        area.map_or((0.0, 0.0), |a| (sum / a, sq.sqrt() / a))
     }
 
     /// Irradiance at `x` (side normal `n`).

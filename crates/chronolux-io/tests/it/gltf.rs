@@ -1196,3 +1196,95 @@ fn image_without_source_or_mime_type_is_an_error_not_a_panic() {
         assert!(msg.contains("images[0]"), "{msg}");
     }
 }
+
+/// A glTF whose camera node is animated (LINEAR translation and rotation keys at t = 0 and
+/// 1 s): the loaded clip moves the camera exactly as the keys say, the frame builder knows
+/// the camera may move (what the temporal techniques read to treat view-dependent reuse),
+/// and consecutive frames report a camera change. Expected values from the keys: at
+/// t = 0.5 the translation is the keys' midpoint, and the rotation the slerp midpoint of
+/// identity and 45° about +y, i.e. 22.5°, so the view direction −z turns to
+/// (−sin 22.5°, 0, −cos 22.5°).
+#[test]
+fn an_animated_camera_moves_as_its_keys_say() {
+    use chronolux_core::scene::delta::FrameDelta;
+    use chronolux_core::scene::desc::AnimationId;
+    use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
+    use std::sync::Arc;
+    let half = std::f32::consts::FRAC_PI_8; // 22.5°, half of the key's 45°
+    let f32s = |v: &[f32]| -> Vec<u8> { v.iter().flat_map(|f| f.to_le_bytes()).collect() };
+    let mut bytes = f32s(&TRI.concat()); // 36 bytes
+    bytes.extend([0u16, 1, 2, 0].iter().flat_map(|i| i.to_le_bytes())); // 6 + 2 padding
+    let times = bytes.len();
+    bytes.extend(f32s(&[0.0, 1.0]));
+    let trans = bytes.len();
+    bytes.extend(f32s(&[0.0, 0.0, 3.0, 1.0, 0.5, 2.0]));
+    let rot = bytes.len();
+    bytes.extend(f32s(&[
+        0.0,
+        0.0,
+        0.0,
+        1.0,
+        0.0,
+        half.sin(),
+        0.0,
+        half.cos(),
+    ]));
+    let gltf = json!({
+        "asset": {"version": "2.0"},
+        "scene": 0,
+        "scenes": [{"nodes": [0, 1]}],
+        "nodes": [{"mesh": 0}, {"camera": 0, "name": "cam", "translation": [0.0, 0.0, 3.0]}],
+        "cameras": [{"type": "perspective", "perspective": {"yfov": 0.8, "znear": 0.01}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": bytes.len(), "uri": b64(&bytes)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 36},
+            {"buffer": 0, "byteOffset": 36, "byteLength": 6},
+            {"buffer": 0, "byteOffset": times, "byteLength": 8},
+            {"buffer": 0, "byteOffset": trans, "byteLength": 24},
+            {"buffer": 0, "byteOffset": rot, "byteLength": 32}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"},
+            {"bufferView": 2, "componentType": 5126, "count": 2, "type": "SCALAR",
+             "min": [0.0], "max": [1.0]},
+            {"bufferView": 3, "componentType": 5126, "count": 2, "type": "VEC3"},
+            {"bufferView": 4, "componentType": 5126, "count": 2, "type": "VEC4"}
+        ],
+        "animations": [{
+            "channels": [
+                {"sampler": 0, "target": {"node": 1, "path": "translation"}},
+                {"sampler": 1, "target": {"node": 1, "path": "rotation"}}
+            ],
+            "samplers": [
+                {"input": 2, "output": 3, "interpolation": "LINEAR"},
+                {"input": 2, "output": 4, "interpolation": "LINEAR"}
+            ]
+        }]
+    });
+    let desc = Arc::new(load_json(&gltf).unwrap());
+    assert_eq!(desc.animations.len(), 1);
+    let mut b = FrameBuilder::new(
+        desc.clone(),
+        Some(AnimationId(0)),
+        CameraChoice::First,
+        8,
+        8,
+    )
+    .unwrap();
+    assert!(b.camera_may_move());
+    let (f0, f1) = (b.build(0.0), b.build(0.5));
+    let w = f1.camera.world_from_camera;
+    let p = Vec3::from(w.translation);
+    assert!((p - Vec3::new(0.5, 0.25, 2.5)).length() < 1e-5, "{p:?}");
+    let fwd = w.transform_vector3(Vec3::new(0.0, 0.0, -1.0));
+    // The key's quaternion holds sin/cos of half its 45°; the midpoint turns by 22.5° = `half`.
+    let want = Vec3::new(-half.sin(), 0.0, -half.cos());
+    assert!((fwd - want).length() < 1e-5, "{fwd:?} vs {want:?}");
+    assert!(FrameDelta::between(&f0, &f1).camera_changed());
+    assert!(!FrameDelta::between(&f1, &b.build(0.5)).camera_changed());
+    // Without the clip the camera stands still.
+    let still = FrameBuilder::new(desc, None, CameraChoice::First, 8, 8).unwrap();
+    assert!(!still.camera_may_move());
+}

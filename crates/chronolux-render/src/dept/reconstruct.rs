@@ -56,49 +56,79 @@ pub struct Neighbours {
     pub radius: f32,
     offsets: Vec<u32>,
     items: Vec<(u32, f32)>,
+    rebuilt: usize,
+}
+
+/// Uniform grid of element centroids (cell = the neighbour radius), buckets filled in
+/// element order.
+struct Grid {
+    cell: f32,
+    buckets: HashMap<(i32, i32, i32), Vec<u32>>,
+}
+
+impl Grid {
+    fn new(fe: &FrameElements, radius: f32) -> Self {
+        let mut g = Grid {
+            cell: radius.max(1e-12),
+            buckets: HashMap::new(),
+        };
+        for (e, c) in fe.centroid.iter().enumerate() {
+            if fe.area[e] > 0.0 {
+                g.buckets.entry(g.key(*c)).or_default().push(e as u32);
+            }
+        }
+        g
+    }
+
+    #[inline]
+    fn key(&self, p: Vec3) -> (i32, i32, i32) {
+        let q = (p / self.cell).floor();
+        (q.x as i32, q.y as i32, q.z as i32)
+    }
+
+    /// Calls `f` with every element in the 27 cells around `p`, in a fixed order.
+    #[inline]
+    fn around(&self, p: Vec3, mut f: impl FnMut(u32)) {
+        let (x, y, z) = self.key(p);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(list) = self.buckets.get(&(x + dx, y + dy, z + dz)) {
+                        list.iter().for_each(|&j| f(j));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Row of `e` (itself first, then the grid elements within `r2` facing its way).
+    #[inline]
+    fn row(&self, fe: &FrameElements, e: usize, r2: f32, out: &mut Vec<(u32, f32)>) {
+        let (c, nrm) = (fe.centroid[e], fe.normal[e]);
+        out.push((e as u32, 0.0));
+        self.around(c, |j| {
+            if j as usize == e || fe.normal[j as usize].dot(nrm) < NORMAL_COS {
+                return;
+            }
+            let d2 = (fe.centroid[j as usize] - c).length_squared();
+            if d2 < r2 {
+                out.push((j, d2));
+            }
+        });
+    }
 }
 
 impl Neighbours {
     pub fn new(fe: &FrameElements, radius: f32) -> Self {
         let n = fe.centroid.len();
-        let cell = radius.max(1e-12);
-        let key = |p: Vec3| {
-            let q = (p / cell).floor();
-            (q.x as i32, q.y as i32, q.z as i32)
-        };
-        let mut grid: HashMap<(i32, i32, i32), Vec<u32>> = HashMap::new();
-        for (e, c) in fe.centroid.iter().enumerate() {
-            if fe.area[e] > 0.0 {
-                grid.entry(key(*c)).or_default().push(e as u32);
-            }
-        }
+        let grid = Grid::new(fe, radius);
         let r2 = radius * radius;
         let rows = parallel::map_chunks(n, 1024, |range| {
             let mut out = Vec::new();
             let mut lens = Vec::new();
             for e in range {
                 let start = out.len();
-                let (c, nrm) = (fe.centroid[e], fe.normal[e]);
-                out.push((e as u32, 0.0));
-                let (x, y, z) = key(c);
-                for dx in -1..=1 {
-                    for dy in -1..=1 {
-                        for dz in -1..=1 {
-                            let Some(list) = grid.get(&(x + dx, y + dy, z + dz)) else {
-                                continue;
-                            };
-                            for &j in list {
-                                if j as usize == e || fe.normal[j as usize].dot(nrm) < NORMAL_COS {
-                                    continue;
-                                }
-                                let d2 = (fe.centroid[j as usize] - c).length_squared();
-                                if d2 < r2 {
-                                    out.push((j, d2));
-                                }
-                            }
-                        }
-                    }
-                }
+                grid.row(fe, e, r2, &mut out);
                 // Rows are deterministic without sorting: grid buckets are filled in
                 // element order and visited in a fixed order. (Sorting them by element id
                 // was 22 % of `spacetime-dept`'s CPU: BENCHMARKS.md, issue 17.)
@@ -106,9 +136,83 @@ impl Neighbours {
             }
             (out, lens)
         });
+        Self::from_rows(radius, rows)
+    }
+
+    /// The lists of `new`, a later (or earlier) frame of the same element mesh, from
+    /// these lists of `old`: only the rows of elements within the radius of an element
+    /// that moved (centroid or normal changed, or its area became or stopped being
+    /// positive), in either frame, are rebuilt; the others are copied. Validity comes
+    /// from the elements' geometry (the animation), never from their light. The result is
+    /// identical to `Neighbours::new(new, radius)`, row order included: a copied row holds
+    /// only static elements, whose grid cells and bucket order (element order) are
+    /// unchanged. `RUST_LOG=chronolux_render=debug` does not print it; the rebuilt
+    /// fraction is [`Neighbours::rebuilt`].
+    pub fn update(&self, old: &FrameElements, new: &FrameElements) -> Self {
+        let n = new.centroid.len();
+        if old.centroid.len() != n {
+            return Self::new(new, self.radius);
+        }
+        let moved: Vec<u32> = (0..n)
+            .filter(|&e| {
+                old.centroid[e] != new.centroid[e]
+                    || old.normal[e] != new.normal[e]
+                    || (old.area[e] > 0.0) != (new.area[e] > 0.0)
+            })
+            .map(|e| e as u32)
+            .collect();
+        if moved.is_empty() {
+            let mut nb = self.clone();
+            nb.rebuilt = 0;
+            return nb;
+        }
+        let grid = Grid::new(new, self.radius);
+        let r2 = self.radius * self.radius;
+        // Dirty: the moved elements, every element without area (not in the grid, so not
+        // found by the queries below: rebuilt always) and every grid element within the
+        // radius of a moved element's old or new centroid (no normal test: conservative).
+        let mut dirty: Vec<bool> = new.area.iter().map(|&a| !(a > 0.0)).collect();
+        for &j in &moved {
+            dirty[j as usize] = true;
+            for p in [old.centroid[j as usize], new.centroid[j as usize]] {
+                grid.around(p, |e| {
+                    if (new.centroid[e as usize] - p).length_squared() < r2 {
+                        dirty[e as usize] = true;
+                    }
+                });
+            }
+        }
+        let rebuilt = dirty.iter().filter(|&&d| d).count();
+        let rows = parallel::map_chunks(n, 1024, |range| {
+            let mut out = Vec::new();
+            let mut lens = Vec::new();
+            for e in range {
+                let start = out.len();
+                if dirty[e] {
+                    grid.row(new, e, r2, &mut out);
+                } else {
+                    out.extend_from_slice(self.of(e));
+                }
+                lens.push((out.len() - start) as u32);
+            }
+            (out, lens)
+        });
+        let mut nb = Self::from_rows(self.radius, rows);
+        nb.rebuilt = rebuilt;
+        nb
+    }
+
+    /// Rows rebuilt by the [`Neighbours::update`] that made these lists (all of them for
+    /// [`Neighbours::new`]).
+    pub fn rebuilt(&self) -> usize {
+        self.rebuilt
+    }
+
+    fn from_rows(radius: f32, rows: Vec<(Vec<(u32, f32)>, Vec<u32>)>) -> Self {
+        let n: usize = rows.iter().map(|r| r.1.len()).sum();
         let mut offsets = Vec::with_capacity(n + 1);
         offsets.push(0u32);
-        let mut items = Vec::new();
+        let mut items = Vec::with_capacity(rows.iter().map(|r| r.0.len()).sum());
         for (o, lens) in rows {
             items.extend(o);
             for l in lens {
@@ -119,6 +223,7 @@ impl Neighbours {
             radius,
             offsets,
             items,
+            rebuilt: n,
         }
     }
 
@@ -126,6 +231,25 @@ impl Neighbours {
     #[inline]
     pub fn of(&self, e: usize) -> &[(u32, f32)] {
         &self.items[self.offsets[e] as usize..self.offsets[e + 1] as usize]
+    }
+}
+
+/// Neighbour lists of one radius carried from frame to frame: each request updates the
+/// lists of the previous one ([`Neighbours::update`]), so on a mostly static scene only
+/// the rows around moving elements are rebuilt (identical to [`Neighbours::new`]).
+#[derive(Clone, Debug, Default)]
+pub struct NeighbourCache {
+    last: Option<(FrameElements, Neighbours)>,
+}
+
+impl NeighbourCache {
+    /// The lists of `fe` within `radius` (world units).
+    pub fn get(&mut self, fe: &FrameElements, radius: f32) -> &Neighbours {
+        let nb = match self.last.take() {
+            Some((old, nb)) if nb.radius == radius => nb.update(&old, fe),
+            _ => Neighbours::new(fe, radius),
+        };
+        &self.last.insert((fe.clone(), nb)).1
     }
 }
 

@@ -61,8 +61,7 @@ use crate::dept::element_map::{
     ElementAccumulators, ElementMesh, FrameElements, FramePhotons, deposit_more_photons,
 };
 use crate::dept::reconstruct::{
-    ElementSolution, Filter, Neighbours, filter_with_sigma, filtered_irradiance_sigma, prior_sq,
-    range_weight,
+    ElementSolution, NeighbourCache, Neighbours, filter_with_sigma, prior_sq, range_weight,
 };
 use crate::dept::reuse::{EyeRecord, Validity, combine, eye_pass};
 use crate::dept::view::DeptView;
@@ -249,6 +248,10 @@ pub fn choose_window(
     (lo, hi)
 }
 
+/// Radius (element sizes) of the Gaussian filter of the photons' direct light (the
+/// visibility threshold of the change test and of the stopping rule).
+const DIRECT_RADIUS: f32 = 2.5;
+
 /// One traced frame: its photon sums and its change statistic.
 struct Traced {
     frame: u32,
@@ -277,8 +280,10 @@ impl Traced {
         }
     }
 
-    /// (Re)computes the change statistic and the direct irradiance from the sums.
-    fn analyse(&mut self, mesh: &ElementMesh, fe: &FrameElements, change_radius: f32) {
+    /// (Re)computes the change statistic and the direct irradiance from the sums, with
+    /// the neighbour lists of `fe` within `change_radius` (`nb_change`) and 2.5 element
+    /// sizes (`nb_direct`).
+    fn analyse(&mut self, fe: &FrameElements, nb_change: &Neighbours, nb_direct: &Neighbours) {
         let mut both: ElementAccumulators = self.photons.indirect.clone();
         let c = &self.photons.caustic;
         for s in 0..both.flux.len() {
@@ -290,19 +295,28 @@ impl Traced {
         // `prior`): it adds one mean photon per neighbour, which where photons are sparse
         // (≪ 1 per element and frame) inflates σ several times and hides real changes.
         // Sides with no photons in either frame have Δ = 0 and never cut.
-        let r = change_radius * mesh.element_size;
-        let nb = Neighbours::new(fe, r);
+        let r = nb_change.radius;
         let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r)).max(1e-30);
-        let (e, sig) = filter_with_sigma(&both, fe, &nb, 0.0, |_, _, d2| (-d2 * inv2s2).exp());
+        let (e, sig) =
+            filter_with_sigma(&both, fe, nb_change, 0.0, |_, _, d2| (-d2 * inv2s2).exp());
         self.stat = luminances(&e);
         self.stat_var = sig.iter().map(|s| s * s).collect();
-        let (d, _) = filtered_irradiance_sigma(
-            mesh,
-            &self.photons.direct,
-            fe,
-            Filter::Gaussian { radius: 2.5 },
-        );
+        // As `filtered_irradiance_sigma` with `Filter::Gaussian { radius: 2.5 }`.
+        let r = nb_direct.radius;
+        let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r));
+        let direct = &self.photons.direct;
+        let (d, _) = filter_with_sigma(direct, fe, nb_direct, prior_sq(direct), |_, _, d2| {
+            (-d2 * inv2s2).exp()
+        });
         self.direct = luminances(&d);
+    }
+
+    /// Radii (world units) of the change statistic's and the direct light's filters.
+    fn radii(mesh: &ElementMesh, change_radius: f32) -> (f32, f32) {
+        (
+            change_radius * mesh.element_size,
+            DIRECT_RADIUS * mesh.element_size,
+        )
     }
 }
 
@@ -358,6 +372,11 @@ pub struct SpacetimeDept {
     last_photons: Option<u64>,
     /// The last frame's windows and solution.
     pub info: Option<SpacetimeFrameInfo>,
+    /// Neighbour lists carried from traced frame to traced frame (change statistic,
+    /// direct light) and from output frame to output frame (the bilateral completion).
+    nb_change: NeighbourCache,
+    nb_direct: NeighbourCache,
+    nb_output: NeighbourCache,
 }
 
 impl SpacetimeDept {
@@ -370,6 +389,9 @@ impl SpacetimeDept {
             last_output: None,
             last_photons: None,
             info: None,
+            nb_change: NeighbourCache::default(),
+            nb_direct: NeighbourCache::default(),
+            nb_output: NeighbourCache::default(),
         }
     }
 
@@ -512,7 +534,16 @@ impl SpacetimeDept {
             let mut t = Traced::new(g, &mesh, &fe);
             let (base, n) = self.first_photons(g);
             deposit_more_photons(sc, &mesh, base..base + n, s.seed, &mut t.photons);
-            t.analyse(&mesh, &fe, s.change_radius);
+            let (rc, rd) = Traced::radii(&mesh, s.change_radius);
+            let nc = self.nb_change.get(&fe, rc);
+            let nd = self.nb_direct.get(&fe, rd);
+            log::debug!(
+                "spacetime-dept frame {g}: neighbour rows rebuilt {} of {} (change), {} (direct)",
+                nc.rebuilt(),
+                fe.area.len(),
+                nd.rebuilt()
+            );
+            t.analyse(&fe, nc, nd);
             let at = self.frames.partition_point(|x| x.frame < g);
             self.frames.insert(at, t);
         }
@@ -563,15 +594,16 @@ impl SequenceRenderer for SpacetimeDept {
             .iter()
             .position(|t| t.frame == frame)
             .expect("output frame traced");
-        let nb = Neighbours::new(&fe, s.radius * mesh.element_size);
         let t0 = std::time::Instant::now();
+        let mut nb_output = std::mem::take(&mut self.nb_output);
+        let nb = nb_output.get(&fe, s.radius * mesh.element_size);
         let (ind, cau, window) = loop {
             let (pi, pc, window) = self.pool(c);
             let cur = &self.frames[c].photons;
             let prior_i = prior_sq(&cur.indirect);
             let prior_c = prior_sq(&cur.caustic);
-            let (ind, si) = self.complete(&pi, &nb, prior_i);
-            let (cau, sc) = self.complete(&pc, &nb, prior_c);
+            let (ind, si) = self.complete(&pi, nb, prior_i);
+            let (cau, sc) = self.complete(&pc, nb, prior_c);
             let Some(rule) = s.auto else {
                 break (ind, cau, window);
             };
@@ -594,11 +626,13 @@ impl SequenceRenderer for SpacetimeDept {
                         s.seed,
                         &mut tr.photons,
                     );
-                    tr.analyse(&mesh, &fe, s.change_radius);
+                    let (rc, rd) = Traced::radii(&mesh, s.change_radius);
+                    tr.analyse(&fe, &Neighbours::new(&fe, rc), &Neighbours::new(&fe, rd));
                 }
                 None => break (ind, cau, window),
             }
         };
+        self.nb_output = nb_output;
         if log::log_enabled!(log::Level::Debug) {
             // Power-weighted mean window length and fraction of whole windows.
             let whole = source.window(frame, s.window, s.window);

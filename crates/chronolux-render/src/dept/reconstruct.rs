@@ -50,13 +50,76 @@ pub enum Filter {
 pub const NORMAL_COS: f32 = 0.9;
 
 /// Neighbouring elements (within a world radius, facing the same way) of every element,
-/// in compressed rows: `(element, squared distance)`, the element itself first.
+/// in compressed rows: `(element, squared distance)`, the element itself first, with the
+/// spatial Gaussian weight of each entry (σ = radius / 2, see [`Neighbours::gauss`]).
+/// Stored in chunks of [`CHUNK`] elements, so that an update moves the chunks whose rows
+/// did not change instead of copying them.
 #[derive(Clone, Debug)]
 pub struct Neighbours {
     pub radius: f32,
+    chunks: Vec<Chunk>,
+    rebuilt: usize,
+}
+
+/// Elements per chunk of [`Neighbours`].
+const CHUNK: usize = 1024;
+
+/// Rows of `CHUNK` consecutive elements.
+#[derive(Clone, Debug, Default)]
+struct Chunk {
     offsets: Vec<u32>,
     items: Vec<(u32, f32)>,
-    rebuilt: usize,
+    gauss: Vec<f32>,
+}
+
+impl Chunk {
+    /// Rows of elements `range` of `fe`: rebuilt from `grid` where `dirty` (all when
+    /// `old` is `None`), copied from `old` elsewhere.
+    fn build(
+        fe: &FrameElements,
+        grid: &Grid,
+        range: std::ops::Range<usize>,
+        old: Option<(&Chunk, &[bool])>,
+    ) -> Chunk {
+        let r2 = grid.cell * grid.cell;
+        let inv2s2 = gauss_inv2s2(grid.cell);
+        let mut c = Chunk {
+            offsets: Vec::with_capacity(range.len() + 1),
+            ..Default::default()
+        };
+        c.offsets.push(0);
+        let start = range.start;
+        for e in range {
+            match old {
+                Some((o, dirty)) if !dirty[e] => {
+                    let (a, b) = (
+                        o.offsets[e - start] as usize,
+                        o.offsets[e - start + 1] as usize,
+                    );
+                    c.items.extend_from_slice(&o.items[a..b]);
+                    c.gauss.extend_from_slice(&o.gauss[a..b]);
+                }
+                _ => {
+                    let from = c.items.len();
+                    // Rows are deterministic without sorting: grid buckets are filled in
+                    // element order and visited in a fixed order. (Sorting them by
+                    // element id was 22 % of `spacetime-dept`'s CPU: BENCHMARKS.md,
+                    // issue 17.)
+                    grid.row(fe, e, r2, &mut c.items);
+                    c.gauss
+                        .extend(c.items[from..].iter().map(|&(_, d2)| (-d2 * inv2s2).exp()));
+                }
+            }
+            c.offsets.push(c.items.len() as u32);
+        }
+        c
+    }
+}
+
+/// `1 / (2σ²)` of the spatial Gaussian of a filter of radius `r` (σ = r / 2).
+#[inline]
+pub fn gauss_inv2s2(r: f32) -> f32 {
+    1.0 / (2.0 * (0.5 * r) * (0.5 * r))
 }
 
 /// Uniform grid of element centroids (cell = the neighbour radius), buckets filled in
@@ -122,33 +185,23 @@ impl Neighbours {
     pub fn new(fe: &FrameElements, radius: f32) -> Self {
         let n = fe.centroid.len();
         let grid = Grid::new(fe, radius);
-        let r2 = radius * radius;
-        let rows = parallel::map_chunks(n, 1024, |range| {
-            let mut out = Vec::new();
-            let mut lens = Vec::new();
-            for e in range {
-                let start = out.len();
-                grid.row(fe, e, r2, &mut out);
-                // Rows are deterministic without sorting: grid buckets are filled in
-                // element order and visited in a fixed order. (Sorting them by element id
-                // was 22 % of `spacetime-dept`'s CPU: BENCHMARKS.md, issue 17.)
-                lens.push((out.len() - start) as u32);
-            }
-            (out, lens)
-        });
-        Self::from_rows(radius, rows)
+        let chunks = parallel::map_chunks(n, CHUNK, |range| Chunk::build(fe, &grid, range, None));
+        Neighbours {
+            radius,
+            chunks,
+            rebuilt: n,
+        }
     }
 
     /// The lists of `new`, a later (or earlier) frame of the same element mesh, from
     /// these lists of `old`: only the rows of elements within the radius of an element
     /// that moved (centroid or normal changed, or its area became or stopped being
-    /// positive), in either frame, are rebuilt; the others are copied. Validity comes
-    /// from the elements' geometry (the animation), never from their light. The result is
-    /// identical to `Neighbours::new(new, radius)`, row order included: a copied row holds
+    /// positive), in either frame, are rebuilt; the others are kept. Validity comes from
+    /// the elements' geometry (the animation), never from their light. The result is
+    /// identical to `Neighbours::new(new, radius)`, row order included: a kept row holds
     /// only static elements, whose grid cells and bucket order (element order) are
-    /// unchanged. `RUST_LOG=chronolux_render=debug` does not print it; the rebuilt
-    /// fraction is [`Neighbours::rebuilt`].
-    pub fn update(&self, old: &FrameElements, new: &FrameElements) -> Self {
+    /// unchanged. The rebuilt count is [`Neighbours::rebuilt`].
+    pub fn update(self, old: &FrameElements, new: &FrameElements) -> Self {
         let n = new.centroid.len();
         if old.centroid.len() != n {
             return Self::new(new, self.radius);
@@ -162,9 +215,7 @@ impl Neighbours {
             .map(|e| e as u32)
             .collect();
         if moved.is_empty() {
-            let mut nb = self.clone();
-            nb.rebuilt = 0;
-            return nb;
+            return Neighbours { rebuilt: 0, ..self };
         }
         let grid = Grid::new(new, self.radius);
         let r2 = self.radius * self.radius;
@@ -183,23 +234,36 @@ impl Neighbours {
             }
         }
         let rebuilt = dirty.iter().filter(|&&d| d).count();
-        let rows = parallel::map_chunks(n, 1024, |range| {
-            let mut out = Vec::new();
-            let mut lens = Vec::new();
-            for e in range {
-                let start = out.len();
-                if dirty[e] {
-                    grid.row(new, e, r2, &mut out);
-                } else {
-                    out.extend_from_slice(self.of(e));
-                }
-                lens.push((out.len() - start) as u32);
-            }
-            (out, lens)
+        let touched: Vec<usize> = (0..self.chunks.len())
+            .filter(|&c| dirty[c * CHUNK..((c + 1) * CHUNK).min(n)].contains(&true))
+            .collect();
+        let fresh = parallel::map_chunks(touched.len(), 1, |r| {
+            r.map(|t| {
+                let c = touched[t];
+                let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+                Chunk::build(new, &grid, range, Some((&self.chunks[c], &dirty)))
+            })
+            .collect::<Vec<_>>()
         });
-        let mut nb = Self::from_rows(self.radius, rows);
-        nb.rebuilt = rebuilt;
-        nb
+        let mut fresh = touched
+            .iter()
+            .copied()
+            .zip(fresh.into_iter().flatten())
+            .peekable();
+        let chunks = self
+            .chunks
+            .into_iter()
+            .enumerate()
+            .map(|(c, old)| match fresh.next_if(|(t, _)| *t == c) {
+                Some((_, ch)) => ch,
+                None => old,
+            })
+            .collect();
+        Neighbours {
+            radius: self.radius,
+            chunks,
+            rebuilt,
+        }
     }
 
     /// Rows rebuilt by the [`Neighbours::update`] that made these lists (all of them for
@@ -208,29 +272,19 @@ impl Neighbours {
         self.rebuilt
     }
 
-    fn from_rows(radius: f32, rows: Vec<(Vec<(u32, f32)>, Vec<u32>)>) -> Self {
-        let n: usize = rows.iter().map(|r| r.1.len()).sum();
-        let mut offsets = Vec::with_capacity(n + 1);
-        offsets.push(0u32);
-        let mut items = Vec::with_capacity(rows.iter().map(|r| r.0.len()).sum());
-        for (o, lens) in rows {
-            items.extend(o);
-            for l in lens {
-                offsets.push(offsets.last().unwrap() + l);
-            }
-        }
-        Neighbours {
-            radius,
-            offsets,
-            items,
-            rebuilt: n,
-        }
-    }
-
     /// Neighbours of `e` (itself first) with squared distances.
     #[inline]
     pub fn of(&self, e: usize) -> &[(u32, f32)] {
-        &self.items[self.offsets[e] as usize..self.offsets[e + 1] as usize]
+        let (c, i) = (&self.chunks[e / CHUNK], e % CHUNK);
+        &c.items[c.offsets[i] as usize..c.offsets[i + 1] as usize]
+    }
+
+    /// The spatial Gaussian weights `exp(−d² / 2σ²)`, σ = radius / 2, of the entries of
+    /// [`Neighbours::of`] (computed once per row, as `(-d2 * gauss_inv2s2(radius)).exp()`).
+    #[inline]
+    pub fn gauss(&self, e: usize) -> &[f32] {
+        let (c, i) = (&self.chunks[e / CHUNK], e % CHUNK);
+        &c.gauss[c.offsets[i] as usize..c.offsets[i + 1] as usize]
     }
 }
 
@@ -291,19 +345,21 @@ pub fn filter_with(
     nb: &Neighbours,
     weight: impl Fn(usize, usize, f32) -> f32 + Sync,
 ) -> Vec<Rgb> {
-    filter_with_sigma(acc, fe, nb, 0.0, weight).0
+    filter_with_sigma(acc, fe, nb, 0.0, |se, sj, d2, _| weight(se, sj, d2)).0
 }
 
 /// [`filter_with`] and the standard error of each filtered luminance estimate,
 /// `√(Σ w² (Σφ²_j + prior)) / (N Σ w A_j)` (weights taken as fixed). `prior` is added to
 /// every element's Σφ² so that elements that have no photons *yet* do not look
 /// noise-free (one phantom photon of mean power, [`prior_sq`]); 0 for the plain estimate.
+/// `weight(e_slot, j_slot, d², g)` also gets the entry's spatial Gaussian `g`
+/// ([`Neighbours::gauss`]).
 pub fn filter_with_sigma(
     acc: &ElementAccumulators,
     fe: &FrameElements,
     nb: &Neighbours,
     prior: f32,
-    weight: impl Fn(usize, usize, f32) -> f32 + Sync,
+    weight: impl Fn(usize, usize, f32, f32) -> f32 + Sync,
 ) -> (Vec<Rgb>, Vec<f32>) {
     let inv_n = 1.0 / acc.photons.max(1) as f32;
     let n = fe.area.len();
@@ -313,9 +369,9 @@ pub fn filter_with_sigma(
             for side in 0..2 {
                 let se = 2 * e + side;
                 let (mut num, mut den, mut sq) = (Rgb::ZERO, 0.0f32, 0.0f32);
-                for &(j, d2) in nb.of(e) {
+                for (&(j, d2), &g) in nb.of(e).iter().zip(nb.gauss(e)) {
                     let sj = 2 * j as usize + side;
-                    let w = weight(se, sj, d2);
+                    let w = weight(se, sj, d2, g);
                     num += acc.flux[sj] * w;
                     den += fe.area[j as usize] * w;
                     sq += (acc.flux_sq[sj] + prior) * w * w;
@@ -375,14 +431,14 @@ pub fn filtered_irradiance_sigma(
     };
     let r = radius * mesh.element_size;
     let nb = Neighbours::new(fe, r);
-    let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r));
+    // The spatial Gaussian `exp(−d² / 2σ²)`, σ = r / 2, is `nb.gauss`.
     match bilateral {
-        None => filter_with_sigma(acc, fe, &nb, prior, |_, _, d2| (-d2 * inv2s2).exp()),
+        None => filter_with_sigma(acc, fe, &nb, prior, |_, _, _, g| g),
         Some((kappa, min_photons)) => {
             let e = element_irradiance(acc, fe);
             let lum: Vec<f32> = e.iter().map(|c| luminance(*c)).collect();
             let sig = element_sigma(acc, fe);
-            filter_with_sigma(acc, fe, &nb, prior, |se, sj, d2| {
+            filter_with_sigma(acc, fe, &nb, prior, |se, sj, _, g| {
                 range_weight(
                     lum[se],
                     lum[sj],
@@ -390,7 +446,7 @@ pub fn filtered_irradiance_sigma(
                     sig[sj],
                     kappa,
                     acc.count[se] < min_photons,
-                ) * (-d2 * inv2s2).exp()
+                ) * g
             })
         }
     }

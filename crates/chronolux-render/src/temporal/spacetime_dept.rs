@@ -295,19 +295,13 @@ impl Traced {
         // `prior`): it adds one mean photon per neighbour, which where photons are sparse
         // (≪ 1 per element and frame) inflates σ several times and hides real changes.
         // Sides with no photons in either frame have Δ = 0 and never cut.
-        let r = nb_change.radius;
-        let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r)).max(1e-30);
-        let (e, sig) =
-            filter_with_sigma(&both, fe, nb_change, 0.0, |_, _, d2| (-d2 * inv2s2).exp());
+        // The spatial Gaussians (σ = radius / 2) are the lists' `gauss`.
+        let (e, sig) = filter_with_sigma(&both, fe, nb_change, 0.0, |_, _, _, g| g);
         self.stat = luminances(&e);
         self.stat_var = sig.iter().map(|s| s * s).collect();
         // As `filtered_irradiance_sigma` with `Filter::Gaussian { radius: 2.5 }`.
-        let r = nb_direct.radius;
-        let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r));
         let direct = &self.photons.direct;
-        let (d, _) = filter_with_sigma(direct, fe, nb_direct, prior_sq(direct), |_, _, d2| {
-            (-d2 * inv2s2).exp()
-        });
+        let (d, _) = filter_with_sigma(direct, fe, nb_direct, prior_sq(direct), |_, _, _, g| g);
         self.direct = luminances(&d);
     }
 
@@ -475,8 +469,6 @@ impl SpacetimeDept {
     /// [`crate::dept::reconstruct::filter_with_sigma`]) added to every side's Σφ².
     fn complete(&self, p: &[Pooled], nb: &Neighbours, prior: f32) -> (Vec<Rgb>, Vec<f32>) {
         let s = &self.settings;
-        let sigma_s = 0.5 * nb.radius;
-        let inv2s2 = 1.0 / (2.0 * sigma_s * sigma_s).max(1e-12);
         let n = p.len() / 2;
         let rows = parallel::map_chunks(n, 1024, |range| {
             let mut out = Vec::with_capacity(2 * range.len());
@@ -486,13 +478,13 @@ impl SpacetimeDept {
                     let (ce, cs) = (p[se].lum(), p[se].sigma());
                     let relax = p[se].count < s.min_photons;
                     let (mut num, mut den, mut sq) = (Rgb::ZERO, 0.0f32, 0.0f32);
-                    for &(j, d2) in nb.of(e) {
+                    // Spatial Gaussian σ = radius / 2: `nb.gauss`.
+                    for (&(j, _), &g) in nb.of(e).iter().zip(nb.gauss(e)) {
                         let q = &p[2 * j as usize + side];
                         if q.na <= 0.0 {
                             continue;
                         }
-                        let w = range_weight(ce, q.lum(), cs, q.sigma(), s.kappa, relax)
-                            * (-d2 * inv2s2).exp();
+                        let w = range_weight(ce, q.lum(), cs, q.sigma(), s.kappa, relax) * g;
                         num += q.flux * w;
                         den += q.na * w;
                         sq += (q.sq + prior) * w * w;

@@ -864,7 +864,7 @@ fn neighbour_lists_updated_across_frames_equal_rebuilt_ones() {
         let mut nb = Neighbours::new(&fe_old, r);
         for g in [1, 4, 5, 0] {
             let fe = FrameElements::new(&src.frame(g), &mesh);
-            let updated = nb.update(&fe_old, &fe);
+            let updated = nb.clone().update(&fe_old, &fe);
             let fresh = Neighbours::new(&fe, r);
             let n = fe.area.len();
             for e in 0..n {
@@ -876,6 +876,8 @@ fn neighbour_lists_updated_across_frames_equal_rebuilt_ones() {
                     bits(fresh.of(e)),
                     "radius {radius}, frame {g}, element {e}"
                 );
+                let gb = |g: &[f32]| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(gb(updated.gauss(e)), gb(fresh.gauss(e)));
             }
             eprintln!(
                 "radius {radius}, frame {g}: {} of {n} rows rebuilt",

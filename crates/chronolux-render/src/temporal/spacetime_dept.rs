@@ -36,8 +36,11 @@
 //!    window grown from the output frame alone has too little evidence against a step
 //!    right next to it.
 //! 3. **Temporal pooling** in the window: ratio estimator `Σ w_k Φ_k / Σ w_k N_k A_k`
-//!    (Φ: flux sum, N: photons emitted, A: element area in frame k), Gaussian weights in
-//!    the frame distance (σ = `temporal_sigma`), so frames with more photons count more.
+//!    (Φ: flux sum, N: photons emitted, A: element area in frame k), so frames with more
+//!    photons count more; `w_k` is a Gaussian in the frame distance (σ = `temporal_sigma`)
+//!    times a **temporal range kernel** on the change statistic
+//!    ([`temporal_weight`], width `temporal_kappa` noise deviations): a bilateral filter in
+//!    time, which bounds the smear of a change the cut missed by a noise-sized amount.
 //! 4. **Spatial bilateral filtering** of the pooled sums over `radius` element sizes:
 //!    spatial Gaussian × range kernel of `kappa` standard deviations of the pooled
 //!    estimates' noise (a precise pooled estimate pools flat neighbourhoods and stops at
@@ -100,8 +103,14 @@ pub struct SpacetimeSettings {
     /// (`RUST_LOG=chronolux_render=debug` prints the windows' power-weighted mean length.)
     pub window: u32,
     /// Temporal Gaussian σ in frames. Default 8 (weights ≥ 0.6 over ±8 frames: the change
-    /// test, not the weights, limits the temporal blur).
+    /// test and the range kernel, not this Gaussian, limit the temporal blur).
     pub temporal_sigma: f32,
+    /// Temporal range kernel: a frame's weight is multiplied by
+    /// `exp(−(S_k − S_f)² / (2 κ_t² (σ_k² + σ_f²)))` (S: the change statistic, σ² its
+    /// variance; f the output frame), so frames whose light differs from the output
+    /// frame's by more than its noise count less ([`temporal_weight`]). 0: flat (only the
+    /// Gaussian and the cut). Default 2.
+    pub temporal_kappa: f32,
     /// Energy test: standard deviations of the difference that make a change
     /// significant. Default 3.
     pub change_threshold: f32,
@@ -134,6 +143,7 @@ impl Default for SpacetimeSettings {
             max_glossy: 2,
             window: 8,
             temporal_sigma: 8.0,
+            temporal_kappa: 2.0,
             change_threshold: 3.0,
             change_weber: 0.02,
             change_radius: 5.0,
@@ -158,6 +168,33 @@ impl SpacetimeSettings {
         }
         self
     }
+}
+
+/// Weight of frame k in the temporal pooling of an element side: its temporal Gaussian
+/// `gauss` times the range kernel of its change statistic `(S_k, var_k)` against the
+/// output frame's `(S_f, var_f)`, `exp(−(S_k − S_f)² / (2 κ² (var_k + var_f)))` (1 when
+/// `kappa` ≤ 0), the temporal counterpart of the spatial bilateral filter's
+/// [`range_weight`] (Weber et al. 2004). A difference Δ pulls the pooled value by at most
+/// `Δ · exp(−Δ² / (2κ²σ_Δ²))` per unit weight, whose largest value over all Δ is
+/// `κ σ_Δ e^(−1/2)`: a step is smeared by at most that (times its weight share) whatever
+/// its size, where flat weights smear it by Δ; on static light the weights stay near 1
+/// (mean `1/√(1 + 1/κ²)` = 0.89 for κ = 2 when the statistic's noise is independent of
+/// the pooled sums'). Within the window of [`choose_window`], whose cut catches the steps
+/// too small per frame for the range kernel (it pools the frames on each side).
+#[inline]
+pub fn temporal_weight(gauss: f32, k: (f32, f32), f: (f32, f32), kappa: f32) -> f32 {
+    if kappa <= 0.0 {
+        return gauss;
+    }
+    gauss
+        * range_weight(
+            f.0,
+            k.0,
+            f.1.max(0.0).sqrt(),
+            k.1.max(0.0).sqrt(),
+            kappa,
+            false,
+        )
 }
 
 /// Chooses the temporal window of one element side. `series[k]` = (change statistic,
@@ -437,7 +474,7 @@ impl SpacetimeDept {
                     if a <= 0.0 {
                         continue;
                     }
-                    let w = weights[k];
+                    let w = temporal_weight(weights[k], series[k], series[c], s.temporal_kappa);
                     let na = w * t.photons.photons() as f32 * a;
                     for (p, acc) in [
                         (&mut ind, &t.photons.indirect),

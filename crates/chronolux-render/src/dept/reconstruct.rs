@@ -52,7 +52,7 @@ pub const NORMAL_COS: f32 = 0.9;
 /// Neighbouring elements (within a world radius, facing the same way) of every element,
 /// in compressed rows: `(element, squared distance)`, the element itself first, with the
 /// spatial Gaussian weight of each entry (σ = radius / 2, see [`Neighbours::gauss`]).
-/// Stored in chunks of [`CHUNK`] elements, so that an update moves the chunks whose rows
+/// Stored in chunks of 1024 elements, so that an update moves the chunks whose rows
 /// did not change instead of copying them.
 #[derive(Clone, Debug)]
 pub struct Neighbours {
@@ -60,6 +60,9 @@ pub struct Neighbours {
     chunks: Vec<Chunk>,
     rebuilt: usize,
 }
+
+/// One row of [`Neighbours`]: `(element, squared distance)`.
+type Row = Vec<(u32, f32)>;
 
 /// Elements per chunk of [`Neighbours`].
 const CHUNK: usize = 1024;
@@ -74,12 +77,14 @@ struct Chunk {
 
 impl Chunk {
     /// Rows of elements `range` of `fe`: rebuilt from `grid` where `dirty` (all when
-    /// `old` is `None`), copied from `old` elsewhere.
+    /// `old` is `None`), copied from `old` elsewhere; rows already built are taken from
+    /// `pre` (sorted elements and their rows).
     fn build(
         fe: &FrameElements,
         grid: &Grid,
         range: std::ops::Range<usize>,
         old: Option<(&Chunk, &[bool])>,
+        pre: (&[u32], &[Row]),
     ) -> Chunk {
         let r2 = grid.cell * grid.cell;
         let inv2s2 = gauss_inv2s2(grid.cell);
@@ -101,11 +106,14 @@ impl Chunk {
                 }
                 _ => {
                     let from = c.items.len();
+                    match pre.0.binary_search(&(e as u32)) {
+                        Ok(i) => c.items.extend_from_slice(&pre.1[i]),
+                        Err(_) => grid.row(fe, e, r2, &mut c.items),
+                    }
                     // Rows are deterministic without sorting: grid buckets are filled in
                     // element order and visited in a fixed order. (Sorting them by
                     // element id was 22 % of `spacetime-dept`'s CPU: BENCHMARKS.md,
                     // issue 17.)
-                    grid.row(fe, e, r2, &mut c.items);
                     c.gauss
                         .extend(c.items[from..].iter().map(|&(_, d2)| (-d2 * inv2s2).exp()));
                 }
@@ -185,7 +193,9 @@ impl Neighbours {
     pub fn new(fe: &FrameElements, radius: f32) -> Self {
         let n = fe.centroid.len();
         let grid = Grid::new(fe, radius);
-        let chunks = parallel::map_chunks(n, CHUNK, |range| Chunk::build(fe, &grid, range, None));
+        let chunks = parallel::map_chunks(n, CHUNK, |range| {
+            Chunk::build(fe, &grid, range, None, (&[], &[]))
+        });
         Neighbours {
             radius,
             chunks,
@@ -219,18 +229,27 @@ impl Neighbours {
         }
         let grid = Grid::new(new, self.radius);
         let r2 = self.radius * self.radius;
-        // Dirty: the moved elements, every element without area (not in the grid, so not
-        // found by the queries below: rebuilt always) and every grid element within the
-        // radius of a moved element's old or new centroid (no normal test: conservative).
+        // The new rows of the moved elements, then the dirty rows: the moved elements,
+        // every element without area (it is in no row, so found by no test below: rebuilt
+        // always) and every element in a moved element's old or new row. That is enough:
+        // for elements with area, e is in j's row exactly when j is in e's (distance and
+        // normal test are symmetric), so a row that held or gains a moved element is that
+        // of an element in the moved one's old or new row.
+        let moved_rows: Vec<Row> = parallel::map_chunks(moved.len(), 64, |r| {
+            r.map(|i| {
+                let mut row = Vec::new();
+                grid.row(new, moved[i] as usize, r2, &mut row);
+                row
+            })
+            .collect::<Vec<_>>()
+        })
+        .into_iter()
+        .flatten()
+        .collect();
         let mut dirty: Vec<bool> = new.area.iter().map(|&a| !(a > 0.0)).collect();
-        for &j in &moved {
-            dirty[j as usize] = true;
-            for p in [old.centroid[j as usize], new.centroid[j as usize]] {
-                grid.around(p, |e| {
-                    if (new.centroid[e as usize] - p).length_squared() < r2 {
-                        dirty[e as usize] = true;
-                    }
-                });
+        for (&j, row) in moved.iter().zip(&moved_rows) {
+            for &(e, _) in self.of(j as usize).iter().chain(row) {
+                dirty[e as usize] = true;
             }
         }
         let rebuilt = dirty.iter().filter(|&&d| d).count();
@@ -241,7 +260,13 @@ impl Neighbours {
             r.map(|t| {
                 let c = touched[t];
                 let range = c * CHUNK..((c + 1) * CHUNK).min(n);
-                Chunk::build(new, &grid, range, Some((&self.chunks[c], &dirty)))
+                Chunk::build(
+                    new,
+                    &grid,
+                    range,
+                    Some((&self.chunks[c], &dirty)),
+                    (&moved, &moved_rows),
+                )
             })
             .collect::<Vec<_>>()
         });
@@ -264,6 +289,11 @@ impl Neighbours {
             chunks,
             rebuilt,
         }
+    }
+
+    /// Entries in all rows.
+    pub fn entries(&self) -> usize {
+        self.chunks.iter().map(|c| c.items.len()).sum()
     }
 
     /// Rows rebuilt by the [`Neighbours::update`] that made these lists (all of them for
@@ -297,6 +327,11 @@ pub struct NeighbourCache {
 }
 
 impl NeighbourCache {
+    /// No lists yet.
+    pub fn is_empty(&self) -> bool {
+        self.last.is_none()
+    }
+
     /// The lists of `fe` within `radius` (world units).
     pub fn get(&mut self, fe: &FrameElements, radius: f32) -> &Neighbours {
         let nb = match self.last.take() {
@@ -305,6 +340,50 @@ impl NeighbourCache {
         };
         &self.last.insert((fe.clone(), nb)).1
     }
+}
+
+/// Largest factor by which the adaptive spatial support changes σ_s² either way
+/// ([`adaptive_sigma2`]): σ_s within [σ₀/√2, √2 σ₀], so neighbour lists of radius
+/// [`ADAPTIVE_LIST_RADIUS`] × 2σ₀ hold the widest kernel to 2σ, as the fixed one is cut.
+pub const ADAPTIVE_RANGE: f32 = 2.0;
+
+/// Radius of the neighbour lists for the adaptive support, relative to the fixed
+/// filter's radius 2σ₀: √[`ADAPTIVE_RANGE`].
+pub const ADAPTIVE_LIST_RADIUS: f32 = std::f32::consts::SQRT_2;
+
+/// Adaptive spatial support (the adaptive σ_s of Weber et al. 2004): the squared Gaussian
+/// σ of every element side, grown where photons are sparse and shrunk where they are
+/// dense so that about `target` photons fall under the kernel. `count[slot]`: photons of
+/// each element side; the photons under the kernel of σ₀ are `C₀ = Σ_j g₀(d_j) count_j`
+/// over the row (g₀ = exp(−d²/2σ₀²)), and since on a surface of locally constant photon
+/// density the count under a Gaussian grows as σ², `σ² = σ₀² · target / C₀`, clamped to
+/// [σ₀²/[`ADAPTIVE_RANGE`], σ₀² · [`ADAPTIVE_RANGE`]] (the neighbour lists bound the
+/// growth; the shrink keeps the filter's bias floor of one element ring).
+pub fn adaptive_sigma2(nb: &Neighbours, count: &[f32], sigma0: f32, target: f32) -> Vec<f32> {
+    let n = count.len() / 2;
+    let inv2s2 = 1.0 / (2.0 * sigma0 * sigma0).max(1e-30);
+    let s02 = sigma0 * sigma0;
+    let rows = parallel::map_chunks(n, 1024, |range| {
+        let mut out = Vec::with_capacity(2 * range.len());
+        for e in range {
+            let mut c = [0.0f32; 2];
+            for &(j, d2) in nb.of(e) {
+                let g = (-d2 * inv2s2).exp();
+                c[0] += g * count[2 * j as usize];
+                c[1] += g * count[2 * j as usize + 1];
+            }
+            for c0 in c {
+                let f = if c0 > 0.0 {
+                    (target / c0).clamp(1.0 / ADAPTIVE_RANGE, ADAPTIVE_RANGE)
+                } else {
+                    ADAPTIVE_RANGE
+                };
+                out.push(s02 * f);
+            }
+        }
+        out
+    });
+    rows.into_iter().flatten().collect()
 }
 
 /// Irradiance per element side without filtering: Φ / (N · A).

@@ -37,15 +37,18 @@
 //!    right next to it.
 //! 3. **Temporal pooling** in the window: ratio estimator `Σ w_k Φ_k / Σ w_k N_k A_k`
 //!    (Φ: flux sum, N: photons emitted, A: element area in frame k), so frames with more
-//!    photons count more; `w_k` is a Gaussian in the frame distance (σ = `temporal_sigma`)
-//!    times a **temporal range kernel** on the change statistic
-//!    ([`temporal_weight`], width `temporal_kappa` noise deviations): a bilateral filter in
-//!    time, which bounds the smear of a change the cut missed by a noise-sized amount.
+//!    photons count more; `w_k` is a Gaussian in the frame distance (σ = `temporal_sigma`),
+//!    optionally times a **temporal range kernel** on the change statistic
+//!    ([`temporal_weight`], width `temporal_kappa` noise deviations; off by default): a
+//!    bilateral filter in time, which bounds the smear of a change the cut missed by a
+//!    noise-sized amount.
 //! 4. **Spatial bilateral filtering** of the pooled sums over `radius` element sizes:
 //!    spatial Gaussian × range kernel of `kappa` standard deviations of the pooled
 //!    estimates' noise (a precise pooled estimate pools flat neighbourhoods and stops at
 //!    edges; below `min_photons` pooled photons the range kernel is dropped: the published
-//!    fix for noisy small elements).
+//!    fix for noisy small elements). With `kernel_photons` set, σ_s adapts to the local
+//!    photon density (grows where photons are sparse, shrinks where they are dense:
+//!    [`crate::dept::reconstruct::adaptive_sigma2`]).
 //! 5. Vertex interpolation and the eye pass are those of `dept` (light sampled per pixel,
 //!    glossy surfaces continued to the next diffuse one, [`crate::dept::view`]), with the
 //!    per-pixel light **pooled over the last `light_history` output frames** where the
@@ -64,7 +67,8 @@ use crate::dept::element_map::{
     ElementAccumulators, ElementMesh, FrameElements, FramePhotons, deposit_more_photons,
 };
 use crate::dept::reconstruct::{
-    ElementSolution, NeighbourCache, Neighbours, filter_with_sigma, prior_sq, range_weight,
+    ADAPTIVE_LIST_RADIUS, ElementSolution, NeighbourCache, Neighbours, adaptive_sigma2,
+    filter_with_sigma, prior_sq, range_weight,
 };
 use crate::dept::reuse::{EyeRecord, Validity, combine, eye_pass};
 use crate::dept::view::DeptView;
@@ -109,7 +113,10 @@ pub struct SpacetimeSettings {
     /// `exp(−(S_k − S_f)² / (2 κ_t² (σ_k² + σ_f²)))` (S: the change statistic, σ² its
     /// variance; f the output frame), so frames whose light differs from the output
     /// frame's by more than its noise count less ([`temporal_weight`]). 0: flat (only the
-    /// Gaussian and the cut). Default 2.
+    /// Gaussian and the cut). Default 0: with κ_t = 2 the FLIP error rose 1.5–2.5 % and
+    /// the flicker 4–9 % on cornell-moving and the demo at 4k–16k photons per frame (κ_t =
+    /// 4: no change), since the cut already stops the visible changes there and the range
+    /// weights add noise (BENCHMARKS.md, issue 17).
     pub temporal_kappa: f32,
     /// Energy test: standard deviations of the difference that make a change
     /// significant. Default 3.
@@ -120,8 +127,17 @@ pub struct SpacetimeSettings {
     /// Radius (element sizes) of the spatial Gaussian pooling of the change statistic.
     /// Default 5.
     pub change_radius: f32,
-    /// Spatial bilateral filter radius in element sizes. Default 2.5 (as `dept-spatial`).
+    /// Spatial bilateral filter radius in element sizes (σ_s = radius / 2). Default 2.5
+    /// (as `dept-spatial`).
     pub radius: f32,
+    /// Adaptive spatial support: photons (pooled over the window) the spatial Gaussian
+    /// should hold; σ_s² is scaled by `kernel_photons / (photons under the σ_s kernel)`
+    /// within [1/2, 2] ([`crate::dept::reconstruct::adaptive_sigma2`]), so the support
+    /// grows where photons are sparse and shrinks where they are dense. 0: fixed σ_s.
+    /// Default 0: 32 lowers the FLIP error 3–6 % at 4k–16k photons per frame but costs
+    /// 1.7–1.9× the CPU (lists of √2 the radius, a Gaussian per entry), more than the
+    /// photons that gain as much (BENCHMARKS.md, issue 17).
+    pub kernel_photons: f32,
     /// Range kernel width in noise standard deviations. Default 2.
     pub kappa: f32,
     /// Below this many pooled photons the range kernel is dropped (plain Gaussian).
@@ -143,11 +159,12 @@ impl Default for SpacetimeSettings {
             max_glossy: 2,
             window: 8,
             temporal_sigma: 8.0,
-            temporal_kappa: 2.0,
+            temporal_kappa: 0.0,
             change_threshold: 3.0,
             change_weber: 0.02,
             change_radius: 5.0,
             radius: 2.5,
+            kernel_photons: 0.0,
             kappa: 2.0,
             min_photons: 8,
             seed: 0,
@@ -507,6 +524,13 @@ impl SpacetimeDept {
     fn complete(&self, p: &[Pooled], nb: &Neighbours, prior: f32) -> (Vec<Rgb>, Vec<f32>) {
         let s = &self.settings;
         let n = p.len() / 2;
+        // Adaptive support: σ² per side (lists of ADAPTIVE_LIST_RADIUS × the radius, see
+        // `output_radius`); fixed: the lists' own Gaussian.
+        let sigma2 = (s.kernel_photons > 0.0).then(|| {
+            let count: Vec<f32> = p.iter().map(|q| q.count as f32).collect();
+            let sigma0 = 0.5 * nb.radius / ADAPTIVE_LIST_RADIUS;
+            adaptive_sigma2(nb, &count, sigma0, s.kernel_photons)
+        });
         let rows = parallel::map_chunks(n, 1024, |range| {
             let mut out = Vec::with_capacity(2 * range.len());
             for e in range {
@@ -515,12 +539,14 @@ impl SpacetimeDept {
                     let (ce, cs) = (p[se].lum(), p[se].sigma());
                     let relax = p[se].count < s.min_photons;
                     let (mut num, mut den, mut sq) = (Rgb::ZERO, 0.0f32, 0.0f32);
-                    // Spatial Gaussian σ = radius / 2: `nb.gauss`.
-                    for (&(j, _), &g) in nb.of(e).iter().zip(nb.gauss(e)) {
+                    // Spatial Gaussian: σ = radius / 2 (`nb.gauss`) or adaptive.
+                    let inv2s2 = sigma2.as_ref().map(|s2| 1.0 / (2.0 * s2[se]).max(1e-30));
+                    for (&(j, d2), &g) in nb.of(e).iter().zip(nb.gauss(e)) {
                         let q = &p[2 * j as usize + side];
                         if q.na <= 0.0 {
                             continue;
                         }
+                        let g = inv2s2.map_or(g, |k| (-d2 * k).exp());
                         let w = range_weight(ce, q.lum(), cs, q.sigma(), s.kappa, relax) * g;
                         num += q.flux * w;
                         den += q.na * w;
@@ -538,6 +564,18 @@ impl SpacetimeDept {
         rows.into_iter().flatten().unzip()
     }
 
+    /// Radius (world) of the output frame's neighbour lists: the filter radius, times
+    /// [`ADAPTIVE_LIST_RADIUS`] with the adaptive support (its widest kernel).
+    fn output_radius(&self, mesh: &ElementMesh) -> f32 {
+        let s = &self.settings;
+        let r = s.radius * mesh.element_size;
+        if s.kernel_photons > 0.0 {
+            r * ADAPTIVE_LIST_RADIUS
+        } else {
+            r
+        }
+    }
+
     /// Traces the frames of `frame`'s window that are not traced yet, and forgets the
     /// frames that left it.
     fn trace_window(&mut self, source: &mut FrameSource, frame: u32, scene: &Arc<FrameScene>) {
@@ -545,6 +583,7 @@ impl SpacetimeDept {
         let window = source.window(frame, s.window, s.window);
         self.frames.retain(|t| window.contains(&t.frame));
         let mesh = self.mesh.take().expect("mesh");
+        let out_radius = self.output_radius(&mesh);
         for g in window {
             if self.frames.iter().any(|t| t.frame == g) {
                 continue;
@@ -567,12 +606,19 @@ impl SpacetimeDept {
             let nc = self.nb_change.get(&fe, rc);
             let nd = self.nb_direct.get(&fe, rd);
             log::debug!(
-                "spacetime-dept frame {g}: neighbour rows rebuilt {} of {} (change), {} (direct)",
+                "spacetime-dept frame {g}: neighbour rows rebuilt {} of {} (change), {} (direct); mean row {:.1} (change), {:.1} (direct)",
                 nc.rebuilt(),
                 fe.area.len(),
-                nd.rebuilt()
+                nd.rebuilt(),
+                nc.entries() as f64 / fe.area.len().max(1) as f64,
+                nd.entries() as f64 / fe.area.len().max(1) as f64
             );
             t.analyse(&fe, nc, nd);
+            // The first output frame's lists are these when the radii agree (later ones
+            // are updated from the previous output frame's).
+            if g == frame && self.nb_output.is_empty() && rd == out_radius {
+                self.nb_output = self.nb_direct.clone();
+            }
             let at = self.frames.partition_point(|x| x.frame < g);
             self.frames.insert(at, t);
         }
@@ -625,7 +671,7 @@ impl SequenceRenderer for SpacetimeDept {
             .expect("output frame traced");
         let t0 = std::time::Instant::now();
         let mut nb_output = std::mem::take(&mut self.nb_output);
-        let nb = nb_output.get(&fe, s.radius * mesh.element_size);
+        let nb = nb_output.get(&fe, self.output_radius(&mesh));
         let (ind, cau, window) = loop {
             let (pi, pc, window) = self.pool(c);
             let cur = &self.frames[c].photons;

@@ -995,3 +995,86 @@ fn temporal_range_kernel_bounds_a_step_and_keeps_static_noise_falling_as_one_ove
         );
     }
 }
+
+/// The adaptive spatial support of `spacetime-dept` (`adaptive_sigma2`) follows the
+/// photon density: on the Cornell floor with photons spread at density ρ on one half and
+/// 2.25 ρ on the other, chosen so that the σ₀ kernel holds `target / 1.5` and
+/// `1.5 · target` photons (a Gaussian over a plane of density ρ holds ρ · 2πσ₀²), the
+/// support grows to σ² = 1.5 σ₀² on the sparse half and shrinks to σ₀² / 1.5 on the dense
+/// half (σ² ∝ 1 / density: the kernel then holds `target` photons on both), within 10 %
+/// at elements farther than the list radius from the density step and the walls (the
+/// lists are cut at 2√2 σ₀, which drops e^(−4) = 1.8 % of the Gaussian's mass, and the
+/// sum over element centroids approximates the integral to a few %). An element side
+/// with no photons around it gets the widest support, `ADAPTIVE_RANGE` · σ₀².
+#[test]
+fn adaptive_support_follows_the_photon_density() {
+    use chronolux_render::dept::reconstruct::{
+        ADAPTIVE_LIST_RADIUS, ADAPTIVE_RANGE, Neighbours, adaptive_sigma2,
+    };
+    let scene = frame0(cornell_box(), 8, 8);
+    let mesh = ElementMesh::build(&scene, 50.0);
+    let fe = FrameElements::new(&scene, &mesh);
+    let sigma0 = 1.25 * mesh.element_size;
+    let r_list = 2.0 * sigma0 * ADAPTIVE_LIST_RADIUS;
+    let nb = Neighbours::new(&fe, r_list);
+    let floor_y = (0..fe.area.len())
+        .filter(|&e| fe.normal[e].y > 0.99 && fe.area[e] > 0.0)
+        .map(|e| fe.centroid[e].y)
+        .fold(f32::INFINITY, f32::min);
+    let floor: Vec<usize> = (0..fe.area.len())
+        .filter(|&e| {
+            fe.normal[e].y > 0.99 && fe.area[e] > 0.0 && (fe.centroid[e].y - floor_y).abs() < 1e-4
+        })
+        .collect();
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for &e in &floor {
+        lo = lo.min(fe.centroid[e]);
+        hi = hi.max(fe.centroid[e]);
+    }
+    let xmid = 0.5 * (lo.x + hi.x);
+    let target = 32.0f32;
+    let rho = target / (1.5 * std::f32::consts::TAU * sigma0 * sigma0);
+    let mut count = vec![0.0f32; 2 * fe.area.len()];
+    for &e in &floor {
+        let d = if fe.centroid[e].x < xmid {
+            rho
+        } else {
+            2.25 * rho
+        };
+        count[2 * e] = d * fe.area[e];
+        count[2 * e + 1] = d * fe.area[e];
+    }
+    let s2 = adaptive_sigma2(&nb, &count, sigma0, target);
+    let interior = |e: usize| {
+        let c = fe.centroid[e];
+        (c.x - xmid).abs() > r_list
+            && c.x - lo.x > r_list
+            && hi.x - c.x > r_list
+            && c.z - lo.z > r_list
+            && hi.z - c.z > r_list
+    };
+    let (mut sparse, mut dense) = (0, 0);
+    for &e in floor.iter().filter(|&&e| interior(e)) {
+        let (f, want) = if fe.centroid[e].x < xmid {
+            sparse += 1;
+            (s2[2 * e] / (sigma0 * sigma0), 1.5)
+        } else {
+            dense += 1;
+            (s2[2 * e] / (sigma0 * sigma0), 1.0 / 1.5)
+        };
+        assert!(
+            (f / want - 1.0).abs() < 0.1,
+            "element {e} at x = {}: σ²/σ₀² = {f}, expected {want}",
+            fe.centroid[e].x
+        );
+    }
+    assert!(
+        sparse > 20 && dense > 20,
+        "{sparse} {dense} interior elements"
+    );
+    // No photons anywhere near (the ceiling): the widest support.
+    let ceiling = (0..fe.area.len())
+        .find(|&e| fe.normal[e].y < -0.99 && fe.area[e] > 0.0)
+        .expect("a ceiling element");
+    assert_eq!(s2[2 * ceiling], ADAPTIVE_RANGE * sigma0 * sigma0);
+}

@@ -534,23 +534,26 @@ impl SpacetimeDept {
             let sigma0 = 0.5 * nb.radius / ADAPTIVE_LIST_RADIUS;
             adaptive_sigma2(nb, &count, sigma0, s.kernel_photons)
         });
+        // Luminance and noise of every side, once (not once per row that reads them).
+        let ls: Vec<(f32, f32)> = p.iter().map(|q| (q.lum(), q.sigma())).collect();
         let rows = parallel::map_chunks(n, 1024, |range| {
             let mut out = Vec::with_capacity(2 * range.len());
             for e in range {
                 for side in 0..2 {
                     let se = 2 * e + side;
-                    let (ce, cs) = (p[se].lum(), p[se].sigma());
+                    let (ce, cs) = ls[se];
                     let relax = p[se].count < s.min_photons;
                     let (mut num, mut den, mut sq) = (Rgb::ZERO, 0.0f32, 0.0f32);
                     // Spatial Gaussian: σ = radius / 2 (`nb.gauss`) or adaptive.
                     let inv2s2 = sigma2.as_ref().map(|s2| 1.0 / (2.0 * s2[se]).max(1e-30));
                     for (&(j, d2), &g) in nb.of(e).iter().zip(nb.gauss(e)) {
-                        let q = &p[2 * j as usize + side];
+                        let sj = 2 * j as usize + side;
+                        let q = &p[sj];
                         if q.na <= 0.0 {
                             continue;
                         }
                         let g = inv2s2.map_or(g, |k| (-d2 * k).exp());
-                        let w = range_weight(ce, q.lum(), cs, q.sigma(), s.kappa, relax) * g;
+                        let w = range_weight(ce, ls[sj].0, cs, ls[sj].1, s.kappa, relax) * g;
                         num += q.flux * w;
                         den += q.na * w;
                         sq += (q.sq + prior) * w * w;

@@ -36,13 +36,19 @@
 //!    window grown from the output frame alone has too little evidence against a step
 //!    right next to it.
 //! 3. **Temporal pooling** in the window: ratio estimator `Σ w_k Φ_k / Σ w_k N_k A_k`
-//!    (Φ: flux sum, N: photons emitted, A: element area in frame k), Gaussian weights in
-//!    the frame distance (σ = `temporal_sigma`), so frames with more photons count more.
+//!    (Φ: flux sum, N: photons emitted, A: element area in frame k), so frames with more
+//!    photons count more; `w_k` is a Gaussian in the frame distance (σ = `temporal_sigma`),
+//!    optionally times a **temporal range kernel** on the change statistic
+//!    ([`temporal_weight`], width `temporal_kappa` noise deviations; off by default): a
+//!    bilateral filter in time, which bounds the smear of a change the cut missed by a
+//!    noise-sized amount.
 //! 4. **Spatial bilateral filtering** of the pooled sums over `radius` element sizes:
 //!    spatial Gaussian × range kernel of `kappa` standard deviations of the pooled
 //!    estimates' noise (a precise pooled estimate pools flat neighbourhoods and stops at
 //!    edges; below `min_photons` pooled photons the range kernel is dropped: the published
-//!    fix for noisy small elements).
+//!    fix for noisy small elements). With `kernel_photons` set, σ_s adapts to the local
+//!    photon density (grows where photons are sparse, shrinks where they are dense:
+//!    [`crate::dept::reconstruct::adaptive_sigma2`]).
 //! 5. Vertex interpolation and the eye pass are those of `dept` (light sampled per pixel,
 //!    glossy surfaces continued to the next diffuse one, [`crate::dept::view`]), with the
 //!    per-pixel light **pooled over the last `light_history` output frames** where the
@@ -61,8 +67,8 @@ use crate::dept::element_map::{
     ElementAccumulators, ElementMesh, FrameElements, FramePhotons, deposit_more_photons,
 };
 use crate::dept::reconstruct::{
-    ElementSolution, Filter, Neighbours, filter_with_sigma, filtered_irradiance_sigma, prior_sq,
-    range_weight,
+    ADAPTIVE_LIST_RADIUS, ElementSolution, NeighbourCache, Neighbours, adaptive_sigma2,
+    filter_with_sigma, prior_sq, range_weight,
 };
 use crate::dept::reuse::{EyeRecord, Validity, combine, eye_pass};
 use crate::dept::view::DeptView;
@@ -101,8 +107,17 @@ pub struct SpacetimeSettings {
     /// (`RUST_LOG=chronolux_render=debug` prints the windows' power-weighted mean length.)
     pub window: u32,
     /// Temporal Gaussian σ in frames. Default 8 (weights ≥ 0.6 over ±8 frames: the change
-    /// test, not the weights, limits the temporal blur).
+    /// test and the range kernel, not this Gaussian, limit the temporal blur).
     pub temporal_sigma: f32,
+    /// Temporal range kernel: a frame's weight is multiplied by
+    /// `exp(−(S_k − S_f)² / (2 κ_t² (σ_k² + σ_f²)))` (S: the change statistic, σ² its
+    /// variance; f the output frame), so frames whose light differs from the output
+    /// frame's by more than its noise count less ([`temporal_weight`]). 0: flat (only the
+    /// Gaussian and the cut). Default 0: with κ_t = 2 the FLIP error rose 1.5–2.5 % and
+    /// the flicker 4–9 % on cornell-moving and the demo at 4k–16k photons per frame (κ_t =
+    /// 4: no change), since the cut already stops the visible changes there and the range
+    /// weights add noise (BENCHMARKS.md, issue 17).
+    pub temporal_kappa: f32,
     /// Energy test: standard deviations of the difference that make a change
     /// significant. Default 3.
     pub change_threshold: f32,
@@ -110,10 +125,22 @@ pub struct SpacetimeSettings {
     /// below which a change is invisible and frames are pooled across it. Default 0.02.
     pub change_weber: f32,
     /// Radius (element sizes) of the spatial Gaussian pooling of the change statistic.
-    /// Default 5.
+    /// Default 2.5, the direct light's radius, so that both filters share one neighbour
+    /// list: against 5 (the former default, 4× the list entries) it cost 20 % less CPU
+    /// on the demo and cornell-moving at 4k–32k photons per frame for a FLIP error within
+    /// ±1.3 % and flicker within +1.2 % (BENCHMARKS.md, issue 17).
     pub change_radius: f32,
-    /// Spatial bilateral filter radius in element sizes. Default 2.5 (as `dept-spatial`).
+    /// Spatial bilateral filter radius in element sizes (σ_s = radius / 2). Default 2.5
+    /// (as `dept-spatial`).
     pub radius: f32,
+    /// Adaptive spatial support: photons (pooled over the window) the spatial Gaussian
+    /// should hold; σ_s² is scaled by `kernel_photons / (photons under the σ_s kernel)`
+    /// within [1/2, 2] ([`crate::dept::reconstruct::adaptive_sigma2`]), so the support
+    /// grows where photons are sparse and shrinks where they are dense. 0: fixed σ_s.
+    /// Default 0: 32 lowers the FLIP error 3–6 % at 4k–16k photons per frame but costs
+    /// 1.7–1.9× the CPU (lists of √2 the radius, a Gaussian per entry), more than the
+    /// photons that gain as much (BENCHMARKS.md, issue 17).
+    pub kernel_photons: f32,
     /// Range kernel width in noise standard deviations. Default 2.
     pub kappa: f32,
     /// Below this many pooled photons the range kernel is dropped (plain Gaussian).
@@ -135,10 +162,12 @@ impl Default for SpacetimeSettings {
             max_glossy: 2,
             window: 8,
             temporal_sigma: 8.0,
+            temporal_kappa: 0.0,
             change_threshold: 3.0,
             change_weber: 0.02,
-            change_radius: 5.0,
+            change_radius: 2.5,
             radius: 2.5,
+            kernel_photons: 0.0,
             kappa: 2.0,
             min_photons: 8,
             seed: 0,
@@ -159,6 +188,33 @@ impl SpacetimeSettings {
         }
         self
     }
+}
+
+/// Weight of frame k in the temporal pooling of an element side: its temporal Gaussian
+/// `gauss` times the range kernel of its change statistic `(S_k, var_k)` against the
+/// output frame's `(S_f, var_f)`, `exp(−(S_k − S_f)² / (2 κ² (var_k + var_f)))` (1 when
+/// `kappa` ≤ 0), the temporal counterpart of the spatial bilateral filter's
+/// [`range_weight`] (Weber et al. 2004). A difference Δ pulls the pooled value by at most
+/// `Δ · exp(−Δ² / (2κ²σ_Δ²))` per unit weight, whose largest value over all Δ is
+/// `κ σ_Δ e^(−1/2)`: a step is smeared by at most that (times its weight share) whatever
+/// its size, where flat weights smear it by Δ; on static light the weights stay near 1
+/// (mean `1/√(1 + 1/κ²)` = 0.89 for κ = 2 when the statistic's noise is independent of
+/// the pooled sums'). Within the window of [`choose_window`], whose cut catches the steps
+/// too small per frame for the range kernel (it pools the frames on each side).
+#[inline]
+pub fn temporal_weight(gauss: f32, k: (f32, f32), f: (f32, f32), kappa: f32) -> f32 {
+    if kappa <= 0.0 {
+        return gauss;
+    }
+    gauss
+        * range_weight(
+            f.0,
+            k.0,
+            f.1.max(0.0).sqrt(),
+            k.1.max(0.0).sqrt(),
+            kappa,
+            false,
+        )
 }
 
 /// Chooses the temporal window of one element side. `series[k]` = (change statistic,
@@ -249,6 +305,10 @@ pub fn choose_window(
     (lo, hi)
 }
 
+/// Radius (element sizes) of the Gaussian filter of the photons' direct light (the
+/// visibility threshold of the change test and of the stopping rule).
+const DIRECT_RADIUS: f32 = 2.5;
+
 /// One traced frame: its photon sums and its change statistic.
 struct Traced {
     frame: u32,
@@ -277,8 +337,10 @@ impl Traced {
         }
     }
 
-    /// (Re)computes the change statistic and the direct irradiance from the sums.
-    fn analyse(&mut self, mesh: &ElementMesh, fe: &FrameElements, change_radius: f32) {
+    /// (Re)computes the change statistic and the direct irradiance from the sums, with
+    /// the neighbour lists of `fe` within `change_radius` (`nb_change`) and 2.5 element
+    /// sizes (`nb_direct`).
+    fn analyse(&mut self, fe: &FrameElements, nb_change: &Neighbours, nb_direct: &Neighbours) {
         let mut both: ElementAccumulators = self.photons.indirect.clone();
         let c = &self.photons.caustic;
         for s in 0..both.flux.len() {
@@ -290,19 +352,22 @@ impl Traced {
         // `prior`): it adds one mean photon per neighbour, which where photons are sparse
         // (≪ 1 per element and frame) inflates σ several times and hides real changes.
         // Sides with no photons in either frame have Δ = 0 and never cut.
-        let r = change_radius * mesh.element_size;
-        let nb = Neighbours::new(fe, r);
-        let inv2s2 = 1.0 / (2.0 * (0.5 * r) * (0.5 * r)).max(1e-30);
-        let (e, sig) = filter_with_sigma(&both, fe, &nb, 0.0, |_, _, d2| (-d2 * inv2s2).exp());
+        // The spatial Gaussians (σ = radius / 2) are the lists' `gauss`.
+        let (e, sig) = filter_with_sigma(&both, fe, nb_change, 0.0, |_, _, _, g| g);
         self.stat = luminances(&e);
         self.stat_var = sig.iter().map(|s| s * s).collect();
-        let (d, _) = filtered_irradiance_sigma(
-            mesh,
-            &self.photons.direct,
-            fe,
-            Filter::Gaussian { radius: 2.5 },
-        );
+        // As `filtered_irradiance_sigma` with `Filter::Gaussian { radius: 2.5 }`.
+        let direct = &self.photons.direct;
+        let (d, _) = filter_with_sigma(direct, fe, nb_direct, prior_sq(direct), |_, _, _, g| g);
         self.direct = luminances(&d);
+    }
+
+    /// Radii (world units) of the change statistic's and the direct light's filters.
+    fn radii(mesh: &ElementMesh, change_radius: f32) -> (f32, f32) {
+        (
+            change_radius * mesh.element_size,
+            DIRECT_RADIUS * mesh.element_size,
+        )
     }
 }
 
@@ -358,6 +423,11 @@ pub struct SpacetimeDept {
     last_photons: Option<u64>,
     /// The last frame's windows and solution.
     pub info: Option<SpacetimeFrameInfo>,
+    /// Neighbour lists carried from traced frame to traced frame (change statistic,
+    /// direct light) and from output frame to output frame (the bilateral completion).
+    nb_change: NeighbourCache,
+    nb_direct: NeighbourCache,
+    nb_output: NeighbourCache,
 }
 
 impl SpacetimeDept {
@@ -370,6 +440,9 @@ impl SpacetimeDept {
             last_output: None,
             last_photons: None,
             info: None,
+            nb_change: NeighbourCache::default(),
+            nb_direct: NeighbourCache::default(),
+            nb_output: NeighbourCache::default(),
         }
     }
 
@@ -421,7 +494,7 @@ impl SpacetimeDept {
                     if a <= 0.0 {
                         continue;
                     }
-                    let w = weights[k];
+                    let w = temporal_weight(weights[k], series[k], series[c], s.temporal_kappa);
                     let na = w * t.photons.photons() as f32 * a;
                     for (p, acc) in [
                         (&mut ind, &t.photons.indirect),
@@ -453,24 +526,34 @@ impl SpacetimeDept {
     /// [`crate::dept::reconstruct::filter_with_sigma`]) added to every side's Σφ².
     fn complete(&self, p: &[Pooled], nb: &Neighbours, prior: f32) -> (Vec<Rgb>, Vec<f32>) {
         let s = &self.settings;
-        let sigma_s = 0.5 * nb.radius;
-        let inv2s2 = 1.0 / (2.0 * sigma_s * sigma_s).max(1e-12);
         let n = p.len() / 2;
+        // Adaptive support: σ² per side (lists of ADAPTIVE_LIST_RADIUS × the radius, see
+        // `output_radius`); fixed: the lists' own Gaussian.
+        let sigma2 = (s.kernel_photons > 0.0).then(|| {
+            let count: Vec<f32> = p.iter().map(|q| q.count as f32).collect();
+            let sigma0 = 0.5 * nb.radius / ADAPTIVE_LIST_RADIUS;
+            adaptive_sigma2(nb, &count, sigma0, s.kernel_photons)
+        });
+        // Luminance and noise of every side, once (not once per row that reads them).
+        let ls: Vec<(f32, f32)> = p.iter().map(|q| (q.lum(), q.sigma())).collect();
         let rows = parallel::map_chunks(n, 1024, |range| {
             let mut out = Vec::with_capacity(2 * range.len());
             for e in range {
                 for side in 0..2 {
                     let se = 2 * e + side;
-                    let (ce, cs) = (p[se].lum(), p[se].sigma());
+                    let (ce, cs) = ls[se];
                     let relax = p[se].count < s.min_photons;
                     let (mut num, mut den, mut sq) = (Rgb::ZERO, 0.0f32, 0.0f32);
-                    for &(j, d2) in nb.of(e) {
-                        let q = &p[2 * j as usize + side];
+                    // Spatial Gaussian: σ = radius / 2 (`nb.gauss`) or adaptive.
+                    let inv2s2 = sigma2.as_ref().map(|s2| 1.0 / (2.0 * s2[se]).max(1e-30));
+                    for (&(j, d2), &g) in nb.of(e).iter().zip(nb.gauss(e)) {
+                        let sj = 2 * j as usize + side;
+                        let q = &p[sj];
                         if q.na <= 0.0 {
                             continue;
                         }
-                        let w = range_weight(ce, q.lum(), cs, q.sigma(), s.kappa, relax)
-                            * (-d2 * inv2s2).exp();
+                        let g = inv2s2.map_or(g, |k| (-d2 * k).exp());
+                        let w = range_weight(ce, ls[sj].0, cs, ls[sj].1, s.kappa, relax) * g;
                         num += q.flux * w;
                         den += q.na * w;
                         sq += (q.sq + prior) * w * w;
@@ -487,6 +570,18 @@ impl SpacetimeDept {
         rows.into_iter().flatten().unzip()
     }
 
+    /// Radius (world) of the output frame's neighbour lists: the filter radius, times
+    /// [`ADAPTIVE_LIST_RADIUS`] with the adaptive support (its widest kernel).
+    fn output_radius(&self, mesh: &ElementMesh) -> f32 {
+        let s = &self.settings;
+        let r = s.radius * mesh.element_size;
+        if s.kernel_photons > 0.0 {
+            r * ADAPTIVE_LIST_RADIUS
+        } else {
+            r
+        }
+    }
+
     /// Traces the frames of `frame`'s window that are not traced yet, and forgets the
     /// frames that left it.
     fn trace_window(&mut self, source: &mut FrameSource, frame: u32, scene: &Arc<FrameScene>) {
@@ -494,6 +589,7 @@ impl SpacetimeDept {
         let window = source.window(frame, s.window, s.window);
         self.frames.retain(|t| window.contains(&t.frame));
         let mesh = self.mesh.take().expect("mesh");
+        let out_radius = self.output_radius(&mesh);
         for g in window {
             if self.frames.iter().any(|t| t.frame == g) {
                 continue;
@@ -512,7 +608,28 @@ impl SpacetimeDept {
             let mut t = Traced::new(g, &mesh, &fe);
             let (base, n) = self.first_photons(g);
             deposit_more_photons(sc, &mesh, base..base + n, s.seed, &mut t.photons);
-            t.analyse(&mesh, &fe, s.change_radius);
+            let (rc, rd) = Traced::radii(&mesh, s.change_radius);
+            let nd = self.nb_direct.get(&fe, rd);
+            // One list for both filters when their radii agree (the default).
+            let nc = if rc == rd {
+                nd
+            } else {
+                self.nb_change.get(&fe, rc)
+            };
+            log::debug!(
+                "spacetime-dept frame {g}: neighbour rows rebuilt {} of {} (change), {} (direct); mean row {:.1} (change), {:.1} (direct)",
+                nc.rebuilt(),
+                fe.area.len(),
+                nd.rebuilt(),
+                nc.entries() as f64 / fe.area.len().max(1) as f64,
+                nd.entries() as f64 / fe.area.len().max(1) as f64
+            );
+            t.analyse(&fe, nc, nd);
+            // The first output frame's lists are these when the radii agree (later ones
+            // are updated from the previous output frame's).
+            if g == frame && self.nb_output.is_empty() && rd == out_radius {
+                self.nb_output = self.nb_direct.clone();
+            }
             let at = self.frames.partition_point(|x| x.frame < g);
             self.frames.insert(at, t);
         }
@@ -563,15 +680,16 @@ impl SequenceRenderer for SpacetimeDept {
             .iter()
             .position(|t| t.frame == frame)
             .expect("output frame traced");
-        let nb = Neighbours::new(&fe, s.radius * mesh.element_size);
         let t0 = std::time::Instant::now();
+        let mut nb_output = std::mem::take(&mut self.nb_output);
+        let nb = nb_output.get(&fe, self.output_radius(&mesh));
         let (ind, cau, window) = loop {
             let (pi, pc, window) = self.pool(c);
             let cur = &self.frames[c].photons;
             let prior_i = prior_sq(&cur.indirect);
             let prior_c = prior_sq(&cur.caustic);
-            let (ind, si) = self.complete(&pi, &nb, prior_i);
-            let (cau, sc) = self.complete(&pc, &nb, prior_c);
+            let (ind, si) = self.complete(&pi, nb, prior_i);
+            let (cau, sc) = self.complete(&pc, nb, prior_c);
             let Some(rule) = s.auto else {
                 break (ind, cau, window);
             };
@@ -594,11 +712,13 @@ impl SequenceRenderer for SpacetimeDept {
                         s.seed,
                         &mut tr.photons,
                     );
-                    tr.analyse(&mesh, &fe, s.change_radius);
+                    let (rc, rd) = Traced::radii(&mesh, s.change_radius);
+                    tr.analyse(&fe, &Neighbours::new(&fe, rc), &Neighbours::new(&fe, rd));
                 }
                 None => break (ind, cau, window),
             }
         };
+        self.nb_output = nb_output;
         if log::log_enabled!(log::Level::Debug) {
             // Power-weighted mean window length and fraction of whole windows.
             let whole = source.window(frame, s.window, s.window);

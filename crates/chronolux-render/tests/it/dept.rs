@@ -501,12 +501,13 @@ fn weighted_fraction(sides: &[(usize, f32)], bad: impl Fn(usize) -> bool) -> f32
 /// vanishes) and the middle of the room. Element sides whose indirect + caustic light
 /// changes visibly at the step (by more than 30 % between frames 3 and 4, in a 200k-photon
 /// frame-by-frame solution) must not pool frames across it: at most 5 % of their power
-/// may have frame 3's window reach frame 4 or frame 4's reach frame 3 (measured 0.0 % and
-/// 0.1 % with these settings; the margin is for the 3σ test's misses, which grow as
-/// photons per side fall). On the far side of the step, where nothing visible changes,
-/// frame 3 keeps frames 0–2 for ≥ 80 % of the power of the sides whose light changes by
-/// < 5 % (measured 88 %: the spatially pooled statistic also cuts sides within 5 elements
-/// of a change, and the sphere moves).
+/// may have frame 3's window reach frame 4 or frame 4's reach frame 3 (measured 0.2 % and
+/// 0.1 % with these settings, 0.0 % and 0.1 % with the former `change_radius` 5; the
+/// margin is for the 3σ test's misses, which grow as photons per side fall). On the far
+/// side of the step, where nothing visible changes, frame 3 keeps frames 0–2 for ≥ 80 %
+/// of the power of the sides whose light changes by < 5 % (measured 96.6 %, 88 % with
+/// `change_radius` 5: the spatially pooled statistic also cuts sides within
+/// `change_radius` elements of a change, and the sphere moves).
 #[test]
 fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
     use chronolux_core::scene::stage::{CAUSTIC_OCCLUDER_TIME, caustic};
@@ -583,7 +584,8 @@ fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
 /// On a static scene the centred window is whole: 2K + 1 frames around a middle frame,
 /// cut short only by the ends of the render list, for at least 95 % of the power (the
 /// change test runs ~10 tests per side at 3σ and a 2 % visibility threshold, so a few
-/// sides cut by noise are expected: measured ≤ 0.5 % per frame; 5 % is the margin).
+/// sides cut by noise are expected: measured ≤ 1.7 % per frame with the default
+/// `change_radius` 2.5, ≤ 0.5 % with 5; 5 % is the margin).
 #[test]
 fn spacetime_window_is_whole_on_a_static_scene() {
     use chronolux_render::sequence::SequenceRenderer;
@@ -844,4 +846,237 @@ fn spacetime_dept_reuses_pixel_light_only_where_nothing_changed() {
             r.0
         );
     }
+}
+
+/// Neighbour lists carried from frame to frame (`Neighbours::update`: only rows within
+/// the radius of a moving element are rebuilt) are identical, row order and squared
+/// distances bit for bit, to lists built from scratch, on the caustic stage whose sphere
+/// moves and whose occluder enters (frames 0 → 1 → 4 → 5 → 0, steps of one and three
+/// frames and back), and they rebuild some rows but not all (the room is static; the
+/// sphere and the occluder are large at 30 elements per diagonal: 37–53 % measured).
+#[test]
+fn neighbour_lists_updated_across_frames_equal_rebuilt_ones() {
+    use chronolux_core::scene::stage::caustic;
+    use chronolux_render::dept::reconstruct::Neighbours;
+    let mut src = crate::source(caustic(), 8, 8, 24.0, (0..6).collect());
+    let mesh = ElementMesh::build(&src.frame(0), 30.0);
+    for radius in [2.5, 5.0] {
+        let r = radius * mesh.element_size;
+        let mut fe_old = FrameElements::new(&src.frame(0), &mesh);
+        let mut nb = Neighbours::new(&fe_old, r);
+        for g in [1, 4, 5, 0] {
+            let fe = FrameElements::new(&src.frame(g), &mesh);
+            let updated = nb.clone().update(&fe_old, &fe);
+            let fresh = Neighbours::new(&fe, r);
+            let n = fe.area.len();
+            for e in 0..n {
+                let bits = |row: &[(u32, f32)]| -> Vec<(u32, u32)> {
+                    row.iter().map(|&(j, d2)| (j, d2.to_bits())).collect()
+                };
+                assert_eq!(
+                    bits(updated.of(e)),
+                    bits(fresh.of(e)),
+                    "radius {radius}, frame {g}, element {e}"
+                );
+                let gb = |g: &[f32]| g.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(gb(updated.gauss(e)), gb(fresh.gauss(e)));
+            }
+            eprintln!(
+                "radius {radius}, frame {g}: {} of {n} rows rebuilt",
+                updated.rebuilt()
+            );
+            assert!(
+                updated.rebuilt() > 0 && updated.rebuilt() < n,
+                "radius {radius}, frame {g}: {} of {n} rows rebuilt",
+                updated.rebuilt()
+            );
+            (fe_old, nb) = (fe, updated);
+        }
+    }
+}
+
+/// The temporal range kernel of `spacetime-dept` (`temporal_weight`, κ = 2, temporal
+/// Gaussian σ = 8 frames, whole centred windows of 2K + 1 frames):
+/// - **a step of any size is smeared by at most a noise-sized amount**: output frame f
+///   just before a noise-free step Δ (all frames after f at 1 + Δ, the rest at 1, each
+///   frame's statistic with variance σ², so σ_Δ = √2 σ) pools
+///   `Σ_after g r Δ / Σ g r`, and since `Δ · exp(−Δ² / 2κ²σ_Δ²) ≤ κ σ_Δ e^(−1/2)` for every
+///   Δ, its error is at most `κ σ_Δ e^(−1/2) · Σ_after g / Σ_before g` (the derived bound,
+///   checked for Δ from 0.1 σ_Δ to 1000 σ_Δ), where flat weights smear Δ · Σ_after g / Σ g;
+///   beyond 10 σ_Δ the range kernel's smear is below 1e-3 of the flat one
+///   (`exp(−100 / 8)` ≈ 4e-6 per frame);
+/// - **static light keeps ~1/N noise**: pooled values with noise σ_x per frame and a change
+///   statistic with independent noise (it is pooled over ~20 elements, so nearly
+///   independent of one element's sums) have variance `σ_x² Σg² / (Σg)² · E[r²] / E[r]²`
+///   with `E[r] = 1/√(1 + 1/κ²)`, `E[r²] = 1/√(1 + 2/κ²)` (r = exp(−z²/2κ²), z ~ N(0, 1)):
+///   1.05 σ_x² / N for κ = 2, so the variance still falls as 1/N with the window. Checked
+///   over 20 000 trials for N = 5, 9, 17 within ±8 % (Monte-Carlo error of a variance over
+///   20 000 trials ≈ √(2/20000) = 1 %; the formula ignores that the centre frame's weight
+///   is 1 and that all weights share S_f: 0.6 % measured in a Python model).
+#[test]
+fn temporal_range_kernel_bounds_a_step_and_keeps_static_noise_falling_as_one_over_n() {
+    use chronolux_core::sampling::rng::Pcg32;
+    use chronolux_render::temporal::spacetime_dept::temporal_weight;
+    let (kappa, sigma_t) = (2.0f32, 8.0f32);
+    let gauss = |dt: f32| (-dt * dt / (2.0 * sigma_t * sigma_t)).exp();
+    // Step.
+    let k = 8usize;
+    let n = 2 * k + 1;
+    let sigma = 0.02f32;
+    let sigma_d = 2f32.sqrt() * sigma;
+    let g: Vec<f32> = (0..n).map(|i| gauss(i as f32 - k as f32)).collect();
+    let (before, after): (f32, f32) = (g[..=k].iter().sum(), g[k + 1..].iter().sum());
+    let bound = kappa * sigma_d * (-0.5f32).exp() * after / before;
+    for step in 0..=40 {
+        let delta = sigma_d * 10f32.powf(-1.0 + step as f32 / 10.0);
+        let s: Vec<f32> = (0..n)
+            .map(|i| if i > k { 1.0 + delta } else { 1.0 })
+            .collect();
+        let w: Vec<f32> = (0..n)
+            .map(|i| temporal_weight(g[i], (s[i], sigma * sigma), (s[k], sigma * sigma), kappa))
+            .collect();
+        let pooled: f32 = w.iter().zip(&s).map(|(a, b)| a * b).sum::<f32>() / w.iter().sum::<f32>();
+        let (smear, flat) = (pooled - 1.0, delta * after / (before + after));
+        assert!(
+            smear <= bound * 1.0001 + 1e-6,
+            "Δ = {:.2} σ_Δ: smear {smear} above the bound {bound}",
+            delta / sigma_d
+        );
+        if delta >= 10.0 * sigma_d {
+            assert!(
+                smear < 1e-3 * flat,
+                "Δ = {:.1} σ_Δ: smear {smear}",
+                delta / sigma_d
+            );
+        }
+    }
+    // Static light.
+    let mut rng = Pcg32::new(17, 3);
+    let mut normal = move || {
+        let (u1, u2) = (rng.next_f32().max(1e-7), rng.next_f32());
+        (-2.0 * u1.ln()).sqrt() * (std::f32::consts::TAU * u2).cos()
+    };
+    let (sx, ss) = (0.05f32, 0.02f32);
+    let er = 1.0 / (1.0 + 1.0 / (kappa * kappa) as f64).sqrt();
+    let er2 = 1.0 / (1.0 + 2.0 / (kappa * kappa) as f64).sqrt();
+    for k in [2usize, 4, 8] {
+        let n = 2 * k + 1;
+        let g: Vec<f32> = (0..n).map(|i| gauss(i as f32 - k as f32)).collect();
+        let (sg, sg2) = (
+            g.iter().map(|&x| x as f64).sum::<f64>(),
+            g.iter().map(|&x| (x * x) as f64).sum::<f64>(),
+        );
+        let predicted = (sx * sx) as f64 * sg2 / (sg * sg) * er2 / (er * er);
+        let trials = 20_000;
+        let (mut m, mut m2) = (0.0f64, 0.0f64);
+        for _ in 0..trials {
+            let x: Vec<f32> = (0..n).map(|_| 1.0 + sx * normal()).collect();
+            let s: Vec<f32> = (0..n).map(|_| 1.0 + ss * normal()).collect();
+            let (mut num, mut den) = (0.0f64, 0.0f64);
+            for i in 0..n {
+                let w = temporal_weight(g[i], (s[i], ss * ss), (s[k], ss * ss), kappa) as f64;
+                num += w * x[i] as f64;
+                den += w;
+            }
+            let p = num / den;
+            m += p;
+            m2 += p * p;
+        }
+        let mean = m / trials as f64;
+        let var = m2 / trials as f64 - mean * mean;
+        let ratio = var / predicted;
+        eprintln!(
+            "N = {n}: variance × N / σ² = {:.3} (predicted {:.3}), ratio {ratio:.3}",
+            var * n as f64 / (sx * sx) as f64,
+            predicted * n as f64 / (sx * sx) as f64
+        );
+        assert!((0.92..=1.08).contains(&ratio), "N = {n}: ratio {ratio}");
+        assert!(
+            (mean - 1.0).abs() < 4.0 * (var / trials as f64).sqrt(),
+            "N = {n}: static light biased: {mean}"
+        );
+    }
+}
+
+/// The adaptive spatial support of `spacetime-dept` (`adaptive_sigma2`) follows the
+/// photon density: on the Cornell floor with photons spread at density ρ on one half and
+/// 2.25 ρ on the other, chosen so that the σ₀ kernel holds `target / 1.5` and
+/// `1.5 · target` photons (a Gaussian over a plane of density ρ holds ρ · 2πσ₀²), the
+/// support grows to σ² = 1.5 σ₀² on the sparse half and shrinks to σ₀² / 1.5 on the dense
+/// half (σ² ∝ 1 / density: the kernel then holds `target` photons on both), within 10 %
+/// at elements farther than the list radius from the density step and the walls (the
+/// lists are cut at 2√2 σ₀, which drops e^(−4) = 1.8 % of the Gaussian's mass, and the
+/// sum over element centroids approximates the integral to a few %). An element side
+/// with no photons around it gets the widest support, `ADAPTIVE_RANGE` · σ₀².
+#[test]
+fn adaptive_support_follows_the_photon_density() {
+    use chronolux_render::dept::reconstruct::{
+        ADAPTIVE_LIST_RADIUS, ADAPTIVE_RANGE, Neighbours, adaptive_sigma2,
+    };
+    let scene = frame0(cornell_box(), 8, 8);
+    let mesh = ElementMesh::build(&scene, 50.0);
+    let fe = FrameElements::new(&scene, &mesh);
+    let sigma0 = 1.25 * mesh.element_size;
+    let r_list = 2.0 * sigma0 * ADAPTIVE_LIST_RADIUS;
+    let nb = Neighbours::new(&fe, r_list);
+    let floor_y = (0..fe.area.len())
+        .filter(|&e| fe.normal[e].y > 0.99 && fe.area[e] > 0.0)
+        .map(|e| fe.centroid[e].y)
+        .fold(f32::INFINITY, f32::min);
+    let floor: Vec<usize> = (0..fe.area.len())
+        .filter(|&e| {
+            fe.normal[e].y > 0.99 && fe.area[e] > 0.0 && (fe.centroid[e].y - floor_y).abs() < 1e-4
+        })
+        .collect();
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for &e in &floor {
+        lo = lo.min(fe.centroid[e]);
+        hi = hi.max(fe.centroid[e]);
+    }
+    let xmid = 0.5 * (lo.x + hi.x);
+    let target = 32.0f32;
+    let rho = target / (1.5 * std::f32::consts::TAU * sigma0 * sigma0);
+    let mut count = vec![0.0f32; 2 * fe.area.len()];
+    for &e in &floor {
+        let d = if fe.centroid[e].x < xmid {
+            rho
+        } else {
+            2.25 * rho
+        };
+        count[2 * e] = d * fe.area[e];
+        count[2 * e + 1] = d * fe.area[e];
+    }
+    let s2 = adaptive_sigma2(&nb, &count, sigma0, target);
+    let interior = |e: usize| {
+        let c = fe.centroid[e];
+        (c.x - xmid).abs() > r_list
+            && c.x - lo.x > r_list
+            && hi.x - c.x > r_list
+            && c.z - lo.z > r_list
+            && hi.z - c.z > r_list
+    };
+    let (mut sparse, mut dense) = (0, 0);
+    for &e in floor.iter().filter(|&&e| interior(e)) {
+        let (f, want) = if fe.centroid[e].x < xmid {
+            sparse += 1;
+            (s2[2 * e] / (sigma0 * sigma0), 1.5)
+        } else {
+            dense += 1;
+            (s2[2 * e] / (sigma0 * sigma0), 1.0 / 1.5)
+        };
+        assert!(
+            (f / want - 1.0).abs() < 0.1,
+            "element {e} at x = {}: σ²/σ₀² = {f}, expected {want}",
+            fe.centroid[e].x
+        );
+    }
+    assert!(
+        sparse > 20 && dense > 20,
+        "{sparse} {dense} interior elements"
+    );
+    // No photons anywhere near (the ceiling): the widest support.
+    let ceiling = (0..fe.area.len())
+        .find(|&e| fe.normal[e].y < -0.99 && fe.area[e] > 0.0)
+        .expect("a ceiling element");
+    assert_eq!(s2[2 * ceiling], ADAPTIVE_RANGE * sigma0 * sigma0);
 }

@@ -18,6 +18,7 @@ use chronolux_render::bdpt::{Bdpt, BdptSettings};
 use chronolux_render::integrator::{Integrator, RenderedFrame};
 use chronolux_render::sequence::{ReuseStats, SequenceRenderer};
 use chronolux_render::temporal::stbpt::adapt::WindowDecision;
+use chronolux_render::temporal::stbpt::strategies::StrategyDecision;
 use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings};
 
 const W: u32 = 32;
@@ -37,8 +38,7 @@ fn stbpt_frame(
     spp: u32,
     seed: u64,
 ) -> (RenderedFrame, ReuseStats) {
-    let mut src = source(desc, W, H, fps, (0..frames).collect());
-    let mut r = Stbpt::new(StbptSettings {
+    let settings = StbptSettings {
         bdpt: BdptSettings {
             spp,
             seed,
@@ -47,7 +47,20 @@ fn stbpt_frame(
         window: k,
         adaptive: false,
         ..Default::default()
-    });
+    };
+    stbpt_frame_with(desc, fps, frames, out, settings)
+}
+
+/// [`stbpt_frame`] with any settings.
+fn stbpt_frame_with(
+    desc: chronolux_core::scene::desc::SceneDesc,
+    fps: f32,
+    frames: u32,
+    out: u32,
+    settings: StbptSettings,
+) -> (RenderedFrame, ReuseStats) {
+    let mut src = source(desc, W, H, fps, (0..frames).collect());
+    let mut r = Stbpt::new(settings);
     for f in 0..=out {
         let img = r.render_frame(&mut src, f, &|_| {});
         if f == out {
@@ -273,4 +286,138 @@ fn stbpt_chooses_k_from_its_reuse_statistics() {
     // frame-by-frame BDPT.
     let (r3, _) = &reports[3];
     assert_eq!((r3.window, r3.retraced, r3.reused), (1, 0, 0), "{r3:?}");
+}
+
+/// The path strategies (`path_strategies`: s ≤ 1 only, MIS over those, no light subpath),
+/// reused across frames through the same validity machinery, agree block by block with
+/// frame 0's own BDPT image on the moving demo and under the moving camera (the test and
+/// tolerance of [`stbpt_frame_agrees_with_its_own_reference_on_a_moving_animation`]):
+/// the path strategies' weights sum to one over the strategies they keep, in every frame.
+#[test]
+fn stbpt_path_strategies_agree_with_bdpt_on_a_moving_animation() {
+    let (k, spp, runs, fps) = (2u32, 2u32, 12u64, 3.0f32);
+    let out = 0u32;
+    for (what, desc) in [
+        ("moving demo, path strategies", stage::demo()),
+        ("moving camera, path strategies", stage::dolly()),
+    ] {
+        let reference = bdpt_reference(desc.clone(), fps, out, 256);
+        let mut imgs = Vec::new();
+        for seed in 0..runs {
+            let settings = StbptSettings {
+                bdpt: BdptSettings {
+                    spp,
+                    seed,
+                    path_strategies: true,
+                    ..Default::default()
+                },
+                window: k,
+                adaptive: false,
+                ..Default::default()
+            };
+            let (img, reuse) = stbpt_frame_with(desc.clone(), fps, out + k + 1, out, settings);
+            assert_eq!(img.invalid_samples, 0);
+            // No light subpath was traced.
+            assert_eq!(reuse.light_subpaths_per_pixel, 0.0, "{reuse:?}");
+            assert!(reuse.reused > 0, "{reuse:?}");
+            imgs.push(img);
+        }
+        assert_agree(&imgs, &reference, what);
+    }
+}
+
+/// A frame served by generated frames of both kinds (some with light tracing, some with
+/// the path strategies) agrees with BDPT: the splats are weighted per pixel by the share
+/// of the landings that came from frames with light tracing (module doc, "BDPT or the
+/// path strategies"). Static Cornell box, cap K = 2, starting with the path strategies:
+/// frames 0–3 use them, the fourth asks for a probe, frame 4 has all strategies, so frame
+/// 2 is served by frames 0–4 of both kinds.
+#[test]
+fn stbpt_frames_of_both_strategy_sets_agree_with_bdpt() {
+    let (k, spp, runs) = (2u32, 2u32, 12u64);
+    let out = 2u32;
+    let reference = bdpt_reference(stage::cornell_box(), 24.0, out, 256);
+    let mut imgs = Vec::new();
+    for seed in 0..runs {
+        let settings = StbptSettings {
+            bdpt: BdptSettings {
+                spp,
+                seed,
+                path_strategies: true,
+                ..Default::default()
+            },
+            window: k,
+            ..Default::default()
+        };
+        let (img, reuse) = stbpt_frame_with(stage::cornell_box(), 24.0, out + k + 1, out, settings);
+        assert_eq!(img.invalid_samples, 0);
+        // Served by 2K + 1 generated frames, some of them (not all) with light subpaths.
+        assert_eq!(reuse.window, 2 * k + 1, "{reuse:?}");
+        let lspp = reuse.light_subpaths_per_pixel;
+        assert!(
+            lspp > 0.0 && lspp < (spp * reuse.window) as f64,
+            "{reuse:?}"
+        );
+        imgs.push(img);
+    }
+    assert_agree(&imgs, &reference, "both strategy sets");
+}
+
+/// Renders frames `0..frames` with stbpt (cap K, `spp` per frame, adaptive) and returns
+/// each frame's choice of strategies (`strategy_decision`).
+fn strategy_reports(
+    desc: chronolux_core::scene::desc::SceneDesc,
+    fps: f32,
+    frames: u32,
+    k: u32,
+    spp: u32,
+) -> Vec<StrategyDecision> {
+    let mut src = source(desc, W, H, fps, (0..frames).collect());
+    let mut r = Stbpt::new(StbptSettings {
+        bdpt: BdptSettings {
+            spp,
+            ..Default::default()
+        },
+        window: k,
+        ..Default::default()
+    });
+    (0..frames)
+        .map(|f| {
+            let img = r.render_frame(&mut src, f, &|_| {});
+            serde_json::from_value(img.report["strategy_decision"].clone())
+                .expect("stbpt reports its choice of strategies")
+        })
+        .collect()
+}
+
+/// The choice of strategies (module doc, "BDPT or the path strategies"), from the
+/// reports. In the Cornell box (diffuse walls, one area light seen by most of the room)
+/// BDPT's light subpaths and connections cost more than they reduce the variance of what
+/// light sampling and BSDF sampling already find: after the first frame stbpt switches to
+/// the path strategies, keeps them and probes all strategies every `PROBE_EVERY` frames.
+/// With the glass sphere's caustic on the floor (`stage::caustic`, seen directly by a
+/// static camera) light tracing finds the caustic paths that camera paths reach only by
+/// hitting the small light through the glass: stbpt keeps all strategies.
+#[test]
+fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
+    let (k, spp, frames) = (2u32, 4u32, 7u32);
+    let cornell = strategy_reports(stage::cornell_box(), 24.0, frames, k, spp);
+    for (f, d) in cornell.iter().enumerate() {
+        eprintln!("cornell box, frame {f}: {d:?}");
+    }
+    let d0 = &cornell[0];
+    assert_eq!((d0.strategies.as_str(), d0.next.as_str()), ("bdpt", "path"), "{d0:?}");
+    assert!(d0.bdpt_over_path.expect("measured with all strategies") > 1.0);
+    for d in &cornell[1..5] {
+        assert_eq!(d.strategies, "path", "{d:?}");
+        assert!(d.variance_bdpt.is_none());
+    }
+    assert_eq!(cornell[4].decision, "probe");
+    assert_eq!(cornell[5].strategies, "bdpt");
+    let caustic = strategy_reports(stage::caustic(), 24.0, 3, k, spp);
+    for (f, d) in caustic.iter().enumerate() {
+        eprintln!("caustic, frame {f}: {d:?}");
+        assert_eq!((d.strategies.as_str(), d.next.as_str()), ("bdpt", "bdpt"), "{d:?}");
+        assert!(d.bdpt_over_path.expect("measured") < 1.0);
+    }
 }

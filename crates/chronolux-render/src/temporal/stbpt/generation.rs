@@ -7,6 +7,7 @@
 
 use super::landing::{Landing, Walk, barycentrics};
 use super::reuse::Regenerated;
+use super::strategies::{self, Pilot, SHADOW_QUERY_COST, luminance};
 use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH, adapt};
 use crate::bdpt::{
     BdptSettings, Vertex, VertexKind, connect_with, generate_camera_subpath,
@@ -76,6 +77,11 @@ impl Counts {
 /// Ray queries (closest-hit and shadow) counted in `s`.
 fn queries(s: &Stats) -> u64 {
     s.rays + s.shadow_rays
+}
+
+/// Ray-query cost in closest-hit units ([`SHADOW_QUERY_COST`]).
+fn query_cost(s: &Stats) -> f64 {
+    s.rays as f64 + SHADOW_QUERY_COST * s.shadow_rays as f64
 }
 
 /// Two answers of one ray that give the same vertex.
@@ -196,6 +202,12 @@ pub(super) struct Generation<'a> {
     pub(super) from_f: &'a [FrameDelta],
     /// What differs between window frames `j` and `j + 1` (motion blur only; else empty).
     pub(super) steps: &'a [FrameDelta],
+    /// `bdpt` with only the path strategies (their MIS weights for the pilot).
+    pub(super) path_bdpt: &'a BdptSettings,
+    /// Count each landing of this frame in the splat film's weights: the frame has light
+    /// tracing and frames without it may serve the same frames (module doc, "BDPT or the
+    /// path strategies").
+    pub(super) count_lt: bool,
 }
 
 /// A sample landed in window frame `j` at `raster` with `value` (buffered until the
@@ -222,6 +234,11 @@ pub(super) struct TileOut {
     /// Motion blur: per landed sample, its raster offsets to where its point is seen one
     /// frame before / after, and its values there (films `film_blur[0..4]`).
     pub(super) blur: [Vec<Contribution>; 4],
+    /// Pilot (strategy choice): per own sample of f, (pixel, luminance of the camera part
+    /// with the generation's strategies, of the path strategies' estimate).
+    pub(super) pilot: Vec<(u32, f64, f64)>,
+    /// Cost (closest-hit units) of the path strategies' part of f's own samples.
+    pub(super) path_cost: f64,
     pub(super) landings: Vec<Landed>,
     pub(super) stats: Vec<Stats>,
     pub(super) counts: Counts,
@@ -335,6 +352,7 @@ impl Generation<'_> {
         ns: &PixelSampler,
         entries: &mut Vec<Entry>,
         st: &mut Stats,
+        pilot: &mut (Rgb, f64),
     ) -> Option<(Rgb, f32)> {
         let scene_f = &self.scenes[self.jf];
         let all = self.mfa.all_frames();
@@ -342,11 +360,13 @@ impl Generation<'_> {
         entries.clear();
         let mut emission: Option<(Rgb, f32)> = None;
         let mut sampler = ns.clone();
+        let jf = self.jf;
         for t in 2..=cam.len() {
-            for s in 0..=light.len() {
+            for s in 0..=self.bdpt.max_light_vertices(light.len()) {
                 if s + t - 1 > max_segments {
                     continue;
                 }
+                let before = query_cost(st);
                 let mut vis = all;
                 let c = connect_with(
                     scene_f,
@@ -365,6 +385,22 @@ impl Generation<'_> {
                         vis != 0
                     },
                 );
+                if s <= 1 {
+                    let (value, cost) = pilot;
+                    // The path strategies' part: its queries, and its value in f with
+                    // the path strategies' MIS weights (the same unweighted contribution).
+                    *cost += query_cost(st) - before;
+                    if let Some(c) = &c
+                        && vis >> jf & 1 == 1
+                    {
+                        let w = if self.bdpt.path_strategies {
+                            c.weight
+                        } else {
+                            mis_weight(scene_f, self.path_bdpt, light, cam, c.sampled.as_ref(), s, t)
+                        };
+                        *value += c.unweighted * w;
+                    }
+                }
                 let Some(c) = c else { continue };
                 let l = c.contribution.l;
                 let x1v = &cam[1];
@@ -417,6 +453,7 @@ impl Generation<'_> {
         let cs0 = cs.clone();
         let ls0 = ls.clone();
         let st = &mut out.stats[jf];
+        let cost0 = query_cost(st);
         generate_camera_subpath_with(
             scene_f,
             self.bdpt,
@@ -434,22 +471,30 @@ impl Generation<'_> {
                 None,
             ),
         );
-        generate_light_subpath_with(
-            scene_f,
-            self.bdpt,
-            &mut ls,
-            &mut sc.light,
-            st,
-            &mut window_trace(
-                self.mfa,
+        let cam_cost = query_cost(st) - cost0;
+        if self.bdpt.path_strategies {
+            // No light subpath: valid wherever the lights and materials are f's.
+            sc.light.clear();
+            sc.light_masks.clear();
+            sc.light_hits.clear();
+        } else {
+            generate_light_subpath_with(
                 scene_f,
-                jf,
-                &mut sc.wh,
-                &mut sc.light_masks,
-                None,
-                Some(&mut sc.light_hits),
-            ),
-        );
+                self.bdpt,
+                &mut ls,
+                &mut sc.light,
+                st,
+                &mut window_trace(
+                    self.mfa,
+                    scene_f,
+                    jf,
+                    &mut sc.wh,
+                    &mut sc.light_masks,
+                    None,
+                    Some(&mut sc.light_hits),
+                ),
+            );
+        }
         st.samples += 1;
         let (cam, light) = (&sc.cam, &sc.light);
 
@@ -488,13 +533,32 @@ impl Generation<'_> {
         };
 
         // View-independent part at x1 (t ≥ 2), shadow rays answered for the whole window.
-        let emission = self.split_at_x1(light, cam, &sc.cam_rays, &ns, &mut sc.entries, st);
+        let mut pilot = (Rgb::ZERO, cam_cost);
+        let emission = self.split_at_x1(
+            light,
+            cam,
+            &sc.cam_rays,
+            &ns,
+            &mut sc.entries,
+            st,
+            &mut pilot,
+        );
 
         // Own frame: the ordinary BDPT sample.
         let mut own = emission.map_or(Rgb::ZERO, |(l, _)| l);
         for e in &sc.entries {
             if e.vis >> jf & 1 == 1 {
                 own += e.c;
+            }
+        }
+        {
+            let (path_value, path_cost) = pilot;
+            out.path_cost += path_cost;
+            if own.is_finite() && path_value.is_finite() {
+                let (w, h) = (scene_f.camera.width, scene_f.camera.height);
+                let pixel = (raster.y as u32).min(h - 1) * w + (raster.x as u32).min(w - 1);
+                out.pilot
+                    .push((pixel, luminance(own), luminance(path_value)));
             }
         }
         let mut inv = 0u64;
@@ -534,7 +598,9 @@ impl Generation<'_> {
                 .iter()
                 .take_while(|&&m| m >> j & 1 == 1)
                 .count();
-            if !light_ok {
+            if !light_ok && self.bdpt.path_strategies {
+                sc.light_g.clear();
+            } else if !light_ok {
                 // Regenerated from the same stream: the rays of the reproduced prefix are
                 // f's rays with f's hits in g, answered without a traversal.
                 let mut l2 = ls0.clone();
@@ -727,10 +793,20 @@ impl Stbpt {
         }
         self.open_films(scenes[jf].camera.width, scenes[jf].camera.height);
         // A moving camera turns light tracing off for the whole sequence (module doc,
-        // "Bias"): the weights of the kept strategies then sum to one in every frame.
+        // "Bias"): the weights of the kept strategies then sum to one in every frame. The
+        // path strategies have none.
+        let path = self.path_next;
         let bdpt = BdptSettings {
-            light_tracing: self.settings.bdpt.light_tracing && !source.builder().camera_may_move(),
+            light_tracing: self.settings.bdpt.light_tracing
+                && !source.builder().camera_may_move()
+                && !path,
+            path_strategies: path,
             ..self.settings.bdpt.clone()
+        };
+        let path_bdpt = BdptSettings {
+            light_tracing: false,
+            path_strategies: true,
+            ..bdpt.clone()
         };
         let gen_ = Generation {
             same_camera,
@@ -745,6 +821,8 @@ impl Stbpt {
             shutter: self.settings.shutter,
             from_f: &from_f,
             steps: &steps,
+            path_bdpt: &path_bdpt,
+            count_lt: bdpt.light_tracing && self.settings.adaptive,
         };
         let cam = &scenes[jf].camera;
         let (w, h) = (cam.width, cam.height);
@@ -758,6 +836,7 @@ impl Stbpt {
         let spp = self.settings.bdpt.spp;
         let mut counts = Counts::new(n);
         let mut stats = vec![Stats::default(); n];
+        let mut pilot = Pilot::new(w, h);
         for (s, first) in
             (0..spp).flat_map(|s| (0..n_tiles).step_by(TILES_PER_BATCH).map(move |t| (s, t)))
         {
@@ -773,6 +852,8 @@ impl Stbpt {
                     landings: Vec::new(),
                     stats: vec![Stats::default(); n],
                     counts: Counts::new(n),
+                    pilot: Vec::new(),
+                    path_cost: 0.0,
                 };
                 let mut sc = Scratch::default();
                 for y in y0..y0 + th {
@@ -795,6 +876,13 @@ impl Stbpt {
                 for (a, b) in stats.iter_mut().zip(&r.stats) {
                     *a += *b;
                 }
+                for &(pixel, b, p) in &r.pilot {
+                    pilot.add_sample(pixel, b, p);
+                }
+                pilot.cost_path += r.path_cost;
+                for c in r.splats.iter().filter(|c| c.splat && c.frame == f) {
+                    pilot.splat_sq[c.pixel as usize] += luminance(c.value).powi(2);
+                }
             }
         }
         for (j, &g) in frames.iter().enumerate() {
@@ -806,8 +894,21 @@ impl Stbpt {
             p.retraced += counts.retraced[j];
             p.invalid += counts.invalid[j];
             p.served_by += 1;
+            p.served_by_lt += u32::from(bdpt.light_tracing);
+            p.served_by_light += u32::from(!path);
         }
         let generated = (w as u64 * h as u64 * spp as u64).max(1);
+        pilot.samples = generated;
+        pilot.cost_bdpt = query_cost(&stats[jf]);
+        let (next, strategy) = strategies::decide(
+            &pilot,
+            spp,
+            path,
+            self.settings.adaptive,
+            &mut self.path_run,
+        );
+        self.path_next = next;
+        self.strategy_decisions.insert(f, strategy);
         self.served.insert(
             f,
             counts.landed.iter().sum::<u64>() as f64 / generated as f64,

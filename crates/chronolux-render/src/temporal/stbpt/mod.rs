@@ -206,6 +206,7 @@ mod generation;
 mod landing;
 mod motion;
 mod reuse;
+pub mod strategies;
 
 /// Settings of [`Stbpt`].
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -282,8 +283,12 @@ struct Pending {
     partial: u64,
     retraced: u64,
     invalid: u64,
-    /// Generated frames whose samples served this frame (light subpaths: `spp` each).
+    /// Generated frames whose samples served this frame.
     served_by: u32,
+    /// Of those, generated with light tracing (their splats: `spp` light subpaths per
+    /// pixel each) / with light subpaths (all BDPT strategies).
+    served_by_lt: u32,
+    served_by_light: u32,
 }
 
 /// Spatio-temporal BDPT; see the module documentation.
@@ -310,6 +315,13 @@ pub struct Stbpt {
     zero_run: u32,
     /// The self-assessment of each generated frame, until the frame is output.
     decisions: BTreeMap<u32, adapt::WindowDecision>,
+    /// The next generated frame uses only the path strategies (module doc, "BDPT or the
+    /// path strategies").
+    path_next: bool,
+    /// Consecutive generated frames with the path strategies ([`strategies::decide`]).
+    path_run: u32,
+    /// The choice of strategies of each generated frame, until the frame is output.
+    strategy_decisions: BTreeMap<u32, strategies::StrategyDecision>,
 }
 
 impl Stbpt {
@@ -319,6 +331,9 @@ impl Stbpt {
             k_next,
             zero_run: 0,
             decisions: BTreeMap::new(),
+            path_next: settings.bdpt.path_strategies,
+            path_run: 0,
+            strategy_decisions: BTreeMap::new(),
             settings,
             film: None,
             film_sq: None,
@@ -409,15 +424,28 @@ impl SequenceRenderer for Stbpt {
         let spp = self.settings.bdpt.spp;
         let scene = source.frame(frame);
         let (w, h) = (scene.camera.width, scene.camera.height);
-        let splat_scale = 1.0 / (spp as f32 * window as f32);
         self.open_films(w, h);
         let (mut means, weights) = self.film.as_mut().expect("opened").finish(frame, 0.0);
         let (squares, _) = self.film_sq.as_mut().expect("opened").finish(frame, 0.0);
-        let (splats, _) = self
+        // The splats are the light-tracing share of the frames with light tracing: mean
+        // over their light subpaths, weighted per pixel by their landings' share (module
+        // doc, "BDPT or the path strategies"); all of the pixel when every frame had it.
+        let lt = p.served_by_lt.max(1);
+        let splat_scale = 1.0 / (spp as f32 * lt as f32);
+        let (mut splats, lt_landed) = self
             .film_splat
             .as_mut()
             .expect("opened")
             .finish(frame, splat_scale);
+        if p.served_by_lt != 0 && p.served_by_lt != window {
+            for ((s, &nb), &n) in splats.iter_mut().zip(&lt_landed).zip(&weights) {
+                *s *= if n > 0.0 {
+                    nb / n
+                } else {
+                    p.served_by_lt as f32 / window as f32
+                };
+            }
+        }
         if self.settings.shutter > 0.0 {
             let blur: Vec<Vec<Rgb>> = self
                 .film_blur
@@ -449,7 +477,7 @@ impl SequenceRenderer for Stbpt {
             reused_partially: p.partial,
             retraced: p.retraced,
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
-            light_subpaths_per_pixel: spp as f64 * window as f64,
+            light_subpaths_per_pixel: spp as f64 * p.served_by_light as f64,
             film: self.film_stats(),
         };
         self.served.retain(|&f, _| f + k >= frame);
@@ -466,6 +494,13 @@ impl SequenceRenderer for Stbpt {
             );
         }
         self.decisions.retain(|&f, _| f > frame);
+        if let Some(d) = self.strategy_decisions.remove(&frame) {
+            report.insert(
+                "strategy_decision".to_string(),
+                serde_json::to_value(d).expect("serialisable"),
+            );
+        }
+        self.strategy_decisions.retain(|&f, _| f > frame);
         RenderedFrame {
             width: w,
             height: h,

@@ -10,8 +10,9 @@ use super::reuse::Regenerated;
 use super::strategies::{self, Pilot, SHADOW_QUERY_COST, luminance};
 use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH, adapt};
 use crate::bdpt::{
-    BdptSettings, Vertex, VertexKind, connect_with, generate_camera_subpath,
-    generate_camera_subpath_with, generate_light_subpath_with, mis_weight,
+    BdptSettings, Connection, MisHeuristic, Vertex, VertexKind, connect_with,
+    generate_camera_subpath, generate_camera_subpath_with, generate_light_subpath_with, mis_weight,
+    strategy_ratios,
 };
 use crate::integrator::{TILE, tile_rect};
 use crate::temporal::window_film::Contribution;
@@ -204,6 +205,9 @@ pub(super) struct Generation<'a> {
     pub(super) steps: &'a [FrameDelta],
     /// `bdpt` with only the path strategies (their MIS weights for the pilot).
     pub(super) path_bdpt: &'a BdptSettings,
+    /// Measure what the path strategies would give (the frame has all strategies and
+    /// chooses the next frame's: module doc, "BDPT or the path strategies").
+    pub(super) pilot: bool,
     /// Count each landing of this frame in the splat film's weights: the frame has light
     /// tracing and frames without it may serve the same frames (module doc, "BDPT or the
     /// path strategies").
@@ -236,7 +240,17 @@ pub(super) struct TileOut {
     pub(super) blur: [Vec<Contribution>; 4],
     /// Pilot (strategy choice): per own sample of f, (pixel, luminance of the camera part
     /// with the generation's strategies, of the path strategies' estimate).
-    pub(super) pilot: Vec<(u32, f64, f64)>,
+    pub(super) pilot: Vec<(u32, f64, f64, f64)>,
+    /// Pilot: the path strategies' second moment estimated from the light-tracing splats
+    /// of f's own samples, (pixel, term) ([`Generation::path_moment`]).
+    pub(super) pilot_splats: Vec<(u32, f64)>,
+    /// Pilot: luminance of f's own contributions from paths the path strategies cannot
+    /// make, and of all of them.
+    pub(super) unreachable: f64,
+    pub(super) reachable: f64,
+    /// Pilot: luminance of f's own contributions by strategy group: s ≤ 1 (t ≥ 2), s ≥ 2
+    /// with t ≥ 2 (connections), t = 1 (light tracing).
+    pub(super) shares: [f64; 3],
     /// Cost (closest-hit units) of the path strategies' part of f's own samples.
     pub(super) path_cost: f64,
     pub(super) landings: Vec<Landed>,
@@ -245,6 +259,50 @@ pub(super) struct TileOut {
 }
 
 impl Generation<'_> {
+    /// The path strategies' second moment for the path of connection `c` (strategy (s, t)
+    /// of f), estimated by importance sampling from BDPT's sample (module doc, "BDPT or
+    /// the path strategies"): `Y(c) · Y(c / w) · Σ_A w'² p_u / p_{s'}` (Y: luminance), A the path strategies
+    /// able to make the path (s′ ≤ 1, t′ ≥ 2), w' their weights among themselves. `None`
+    /// when no path strategy can make it.
+    fn path_moment(
+        &self,
+        light: &[Vertex],
+        cam: &[Vertex],
+        c: &Connection,
+        s: usize,
+        t: usize,
+        ratios: &mut Vec<(usize, f32)>,
+    ) -> Option<f64> {
+        let scene_f = &self.scenes[self.jf];
+        strategy_ratios(
+            scene_f,
+            self.bdpt,
+            light,
+            cam,
+            c.sampled.as_ref(),
+            s,
+            t,
+            ratios,
+        );
+        let (mut r2, mut r3, mut r1) = (0.0f64, 0.0f64, 0.0f64);
+        for &(sp, r) in ratios.iter() {
+            if sp <= 1 && s + t - sp >= 2 && r > 0.0 {
+                let r = r as f64;
+                r1 += r;
+                r2 += r * r;
+                r3 += r * r * r;
+            }
+        }
+        let factor = match self.bdpt.mis {
+            // w' = r² / Σ r²: Σ w'² / r = Σ r³ / (Σ r²)².
+            MisHeuristic::Power if r2 > 0.0 => r3 / (r2 * r2),
+            // w' = r / Σ r: Σ w'² / r = 1 / Σ r.
+            MisHeuristic::Balance if r1 > 0.0 => 1.0 / r1,
+            _ => return None,
+        };
+        Some(luminance(c.unweighted) * luminance(c.contribution.l) * factor)
+    }
+
     /// The t = 1 strategies of `light` with at least `s_min` light vertices in frame `j`,
     /// splatted into `out`. With `record` (frame f only), shadow rays are answered for the
     /// whole window and every splat is recorded with its s and the frames it is unoccluded
@@ -276,7 +334,7 @@ impl Generation<'_> {
             let mut vis: FrameMask = 1 << j;
             // Recording: the shadow ray answered for the whole window; otherwise for j.
             let windowed = record.is_some();
-            let c = connect_with(
+            let conn = connect_with(
                 scene,
                 self.bdpt,
                 light,
@@ -296,9 +354,9 @@ impl Generation<'_> {
                         !scene.occluded(r)
                     }
                 },
-            )
-            .map(|c| c.contribution);
-            let Some(c) = c else { continue };
+            );
+            let Some(conn) = conn else { continue };
+            let c = conn.contribution;
             let Some(r) = c.raster else { continue };
             if !c.l.is_finite() {
                 *invalid += 1;
@@ -306,6 +364,16 @@ impl Generation<'_> {
             }
             let (x, y) = (r.x as u32, r.y as u32);
             if r.x >= 0.0 && r.y >= 0.0 && x < w && y < h {
+                if self.pilot && j == self.jf && vis >> j & 1 == 1 {
+                    let mut ratios = Vec::new();
+                    let lum = luminance(c.l);
+                    out.reachable += lum;
+                    out.shares[2] += lum;
+                    match self.path_moment(light, camera, &conn, s, 1, &mut ratios) {
+                        Some(m) => out.pilot_splats.push((y * w + x, m)),
+                        None => out.unreachable += lum,
+                    }
+                }
                 if let Some(rec) = record.as_deref_mut() {
                     rec.push((s, y * w + x, c.l, vis));
                 }
@@ -343,7 +411,11 @@ impl Generation<'_> {
     /// every strategy t ≥ 2 of `cam` and `light` evaluated in f, its shadow ray answered
     /// for the whole window, written into `entries` as `f(x1, wo, wi_k) ⊙ R_k` (R_k: all
     /// but x1's BSDF for f's view). Returns x1's own emission (s = 0, t = 2) with its MIS
-    /// weight, kept apart because it is re-evaluated towards another view.
+    /// weight, kept apart because it is re-evaluated towards another view. Adds to
+    /// `pilot` the path strategies' value in f, their cost and the correction of their
+    /// second moment, and to `reach` the luminance unreachable by them, in all and per
+    /// strategy group (with [`Generation::pilot`]; the value and cost always).
+    #[allow(clippy::too_many_arguments)] // reason: the subpaths, the streams and the pilot's sums
     fn split_at_x1(
         &self,
         light: &[Vertex],
@@ -352,7 +424,8 @@ impl Generation<'_> {
         ns: &PixelSampler,
         entries: &mut Vec<Entry>,
         st: &mut Stats,
-        pilot: &mut (Rgb, f64),
+        pilot: &mut (Rgb, f64, f64),
+        out_reach: &mut (f64, f64, [f64; 3]),
     ) -> Option<(Rgb, f32)> {
         let scene_f = &self.scenes[self.jf];
         let all = self.mfa.all_frames();
@@ -361,6 +434,7 @@ impl Generation<'_> {
         let mut emission: Option<(Rgb, f32)> = None;
         let mut sampler = ns.clone();
         let jf = self.jf;
+        let mut ratios = Vec::new();
         for t in 2..=cam.len() {
             for s in 0..=self.bdpt.max_light_vertices(light.len()) {
                 if s + t - 1 > max_segments {
@@ -385,20 +459,46 @@ impl Generation<'_> {
                         vis != 0
                     },
                 );
+                if self.pilot
+                    && let Some(c) = &c
+                    && vis >> jf & 1 == 1
+                {
+                    let lum = luminance(c.contribution.l);
+                    out_reach.1 += lum;
+                    out_reach.2[usize::from(s >= 2)] += lum;
+                    match self.path_moment(light, cam, c, s, t, &mut ratios) {
+                        Some(m) => pilot.2 += m,
+                        None => out_reach.0 += lum,
+                    }
+                }
                 if s <= 1 {
-                    let (value, cost) = pilot;
+                    let (value, cost, moment) = (&mut pilot.0, &mut pilot.1, &mut pilot.2);
                     // The path strategies' part: its queries, and its value in f with
                     // the path strategies' MIS weights (the same unweighted contribution).
                     *cost += query_cost(st) - before;
                     if let Some(c) = &c
                         && vis >> jf & 1 == 1
                     {
-                        let w = if self.bdpt.path_strategies {
+                        let w = if self.bdpt.path_strategies || !self.pilot {
                             c.weight
                         } else {
-                            mis_weight(scene_f, self.path_bdpt, light, cam, c.sampled.as_ref(), s, t)
+                            mis_weight(
+                                scene_f,
+                                self.path_bdpt,
+                                light,
+                                cam,
+                                c.sampled.as_ref(),
+                                s,
+                                t,
+                            )
                         };
-                        *value += c.unweighted * w;
+                        let cp = c.unweighted * w;
+                        *value += cp;
+                        // Its square: the sampled counterpart of the importance-sampled
+                        // diagonal term above.
+                        if self.pilot {
+                            *moment -= luminance(cp).powi(2);
+                        }
                     }
                 }
                 let Some(c) = c else { continue };
@@ -533,7 +633,8 @@ impl Generation<'_> {
         };
 
         // View-independent part at x1 (t ≥ 2), shadow rays answered for the whole window.
-        let mut pilot = (Rgb::ZERO, cam_cost);
+        let mut pilot = (Rgb::ZERO, cam_cost, 0.0);
+        let mut reach = (0.0, 0.0, [0.0; 3]);
         let emission = self.split_at_x1(
             light,
             cam,
@@ -542,7 +643,13 @@ impl Generation<'_> {
             &mut sc.entries,
             st,
             &mut pilot,
+            &mut reach,
         );
+        out.unreachable += reach.0;
+        out.reachable += reach.1;
+        for (a, b) in out.shares.iter_mut().zip(reach.2) {
+            *a += b;
+        }
 
         // Own frame: the ordinary BDPT sample.
         let mut own = emission.map_or(Rgb::ZERO, |(l, _)| l);
@@ -552,13 +659,13 @@ impl Generation<'_> {
             }
         }
         {
-            let (path_value, path_cost) = pilot;
+            let (path_value, path_cost, path_moment) = pilot;
             out.path_cost += path_cost;
             if own.is_finite() && path_value.is_finite() {
                 let (w, h) = (scene_f.camera.width, scene_f.camera.height);
                 let pixel = (raster.y as u32).min(h - 1) * w + (raster.x as u32).min(w - 1);
                 out.pilot
-                    .push((pixel, luminance(own), luminance(path_value)));
+                    .push((pixel, luminance(own), luminance(path_value), path_moment));
             }
         }
         let mut inv = 0u64;
@@ -822,6 +929,7 @@ impl Stbpt {
             from_f: &from_f,
             steps: &steps,
             path_bdpt: &path_bdpt,
+            pilot: self.settings.adaptive && !path,
             count_lt: bdpt.light_tracing && self.settings.adaptive,
         };
         let cam = &scenes[jf].camera;
@@ -853,6 +961,10 @@ impl Stbpt {
                     stats: vec![Stats::default(); n],
                     counts: Counts::new(n),
                     pilot: Vec::new(),
+                    pilot_splats: Vec::new(),
+                    unreachable: 0.0,
+                    reachable: 0.0,
+                    shares: [0.0; 3],
                     path_cost: 0.0,
                 };
                 let mut sc = Scratch::default();
@@ -876,8 +988,16 @@ impl Stbpt {
                 for (a, b) in stats.iter_mut().zip(&r.stats) {
                     *a += *b;
                 }
-                for &(pixel, b, p) in &r.pilot {
-                    pilot.add_sample(pixel, b, p);
+                for &(pixel, b, p, m) in &r.pilot {
+                    pilot.add_sample(pixel, b, p, m);
+                }
+                for &(pixel, m) in &r.pilot_splats {
+                    pilot.moment[pixel as usize] += m;
+                }
+                pilot.unreachable += r.unreachable;
+                pilot.reachable += r.reachable;
+                for (a, b) in pilot.shares.iter_mut().zip(r.shares) {
+                    *a += b;
                 }
                 pilot.cost_path += r.path_cost;
                 for c in r.splats.iter().filter(|c| c.splat && c.frame == f) {

@@ -159,7 +159,8 @@
 //! generated frame gets the largest K such that every distance up to K paid, one more
 //! when all did (up to the cap). When distance 1 does not pay, K = 0: the samples serve
 //! only their own frame, i.e. the effort is spent as frame-by-frame `bdpt` spends it
-//! (without light tracing when the camera moves, see "Bias"); every [`adapt::PROBE_EVERY`]
+//! (without light tracing when the camera moves, see "Bias"), or as `path` spends it when
+//! the frame uses the path strategies (next section); every [`adapt::PROBE_EVERY`]
 //! such frames one frame is generated at K = 1 to measure again. With motion blur K ≥ 1
 //! (the trajectories need the neighbouring frames). The decision and its
 //! statistics are reported per frame (`reuse_decision` in `run.json`). A frame's
@@ -170,6 +171,71 @@
 //! (dynamic instances are answered per frame, so it grows with K on deforming meshes) is
 //! charged to f's own samples, i.e. counted as BDPT cost; the value of the light-tracing
 //! splats a frame receives from regenerated light subpaths is not counted.
+//!
+//! # BDPT or the path strategies
+//!
+//! **Why BDPT loses to `path` on some scenes.** Measured on the skinned RiggedSimple in the
+//! Cornell stage (64×64, frames 0–3, 8 spp, `--threads 1`, ray queries from `run.json`):
+//! a BDPT sample costs 2.2× a `path` sample (1.63 against 0.73 CPU s). Its camera walk and
+//! light samples (s ≤ 1) are `path`'s own work (0.49 M closest-hit, 0.32 M shadow
+//! queries); on top come the light subpaths (+0.46 M closest-hit queries, 94 % of the
+//! camera walks'), the connections s ≥ 2 (+0.91 M shadow queries, with their MIS weights
+//! and BSDF evaluations) and light tracing (+0.36 M). What this buys is small there:
+//! measured per sample on the same camera subpaths (the pilot below), BDPT's relative
+//! variance is 0.24 against 0.44 for the path strategies alone, 1.85× lower for 2.25× the
+//! cost. The room is diffuse and lit by a large ceiling light that light sampling finds
+//! from almost every camera vertex; the connections' and light tracing's share of the
+//! image (`contribution_shares` in `run.json`) is mostly light the path strategies already
+//! sample well, so MIS moves weight between strategies without finding new paths. Where
+//! a glass sphere focuses the light (the demo, `builtin:caustic`), camera paths find the
+//! caustic only by hitting the lamp through the glass: the path strategies' variance is
+//! 10–40× BDPT's and BDPT wins.
+//!
+//! **The path strategies** ([`BdptSettings::path_strategies`]): the same camera subpath,
+//! only the strategies s = 0 (the walk hits an emitter) and s = 1 (a light sample at each
+//! camera vertex), MIS (power heuristic) over those two only, no light subpath, no light
+//! tracing: `path`'s estimator written with BDPT's vertices, so everything above
+//! (landing, the shading split at x1, validity, partial reuse, re-traces, K) applies
+//! unchanged; with no light subpath, a sample is valid in g wherever its camera segments
+//! are and g's lights and materials are f's. Unbiased for the same reasons as BDPT without
+//! light tracing (its weights sum to one over the strategies it keeps, which all sample
+//! x1 from the camera: also with a moving camera).
+//!
+//! **The decision**, per generated frame, from counts and sample values of the frame's own
+//! samples ([`strategies::decide`]): a frame generated with all strategies also evaluates,
+//! for each sample, the value the path strategies give on the same camera subpath and the
+//! same light samples (s ≤ 1 contributions re-weighted by [`crate::bdpt::mis_weight`]
+//! among themselves: no ray), and counts the cost of both parts (closest-hit queries +
+//! [`strategies::SHADOW_QUERY_COST`] per shadow query, fitted to CPU time). Variances are
+//! of the luminance, relative (per pixel divided by the local mean², floored at 0.1 of the
+//! frame mean), per sample; BDPT's includes its light-tracing splats (Σ c² / spp per
+//! pixel). The path strategies' variance from their own few samples would miss exactly
+//! what makes them lose: rare high-valued paths (caustics seen through a diffuse
+//! surface), which 1–4 samples per pixel seldom meet. So their **diagonal** second moment
+//! (Σ over strategies of w'² f² / p_{s'}) is importance-sampled from every BDPT
+//! contribution (light tracing included), with the density ratios p_{s'} / p_u of the
+//! BDPT path ([`crate::bdpt::strategy_ratios`]), replacing the sampled diagonal terms; the
+//! cross terms between path lengths of one camera walk stay as sampled. BDPT's
+//! contributions from paths no path strategy can make (delta lights behind specular
+//! surfaces) count as `unreachable_share`: above [`strategies::UNREACHABLE_MAX`], BDPT is
+//! kept whatever the variances. The next frame uses the path strategies iff
+//! variance_path × cost_path < variance_bdpt × cost_bdpt; after [`strategies::PROBE_EVERY`]
+//! frames with them, one frame is generated with all strategies to measure again. The
+//! figures are in `run.json` per frame (`strategy_decision`, beside `reuse_decision`). The
+//! comparison is of the frame's own samples: it assumes a landing in another frame is
+//! worth the same share of a fresh sample with either strategy set, and it leaves the
+//! pilot's own work (≈ 8 % of a BDPT frame's CPU on the demo) in BDPT's cost.
+//!
+//! **Frames served by both kinds.** A frame g may be served by generated frames with light
+//! tracing (BDPT, static camera) and without it (path strategies): the first estimate the
+//! radiance minus its light-tracing share at their landings, the others all of it. Each
+//! landing of a frame with light tracing is counted per pixel (in the splat film's
+//! weights); the splats, averaged over the frames with light tracing, are weighted per
+//! pixel by the share n_lt / n of the landings there that came from those frames, so the
+//! pixel's expectation is (n_lt (μ − μ_lt) + (n − n_lt) μ) / n + (n_lt / n) μ_lt = μ
+//! (test `stbpt_frames_of_both_strategy_sets_agree_with_bdpt`).
+//!
+//! [`BdptSettings::path_strategies`]: crate::bdpt::BdptSettings::path_strategies
 //!
 //! # Memory
 //!
@@ -218,8 +284,10 @@ pub struct StbptSettings {
     /// frame); with `adaptive`, each generated frame's K is chosen in 0..=window from the
     /// reuse statistics (module doc, "Choosing K"). Default 4. At most 31.
     pub window: u32,
-    /// Choose K per generated frame from the reuse statistics (true), or always use
-    /// `window` (false). Default true.
+    /// Choose K per generated frame from the reuse statistics, and BDPT's strategies or
+    /// the path strategies from the pilot (true: module doc, "Choosing K" and "BDPT or
+    /// the path strategies"); or always use `window` and the strategies of `bdpt` (false).
+    /// Default true.
     #[serde(default = "adaptive_default")]
     pub adaptive: bool,
     /// Motion blur: fraction of the frame interval the shutter is open, centred on the

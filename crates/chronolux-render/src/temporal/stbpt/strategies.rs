@@ -18,7 +18,7 @@ use chronolux_core::color::Rgb;
 /// path 0.71 CPU s for 0.488 M closest-hit and 0.321 M shadow queries, bdpt 1.67 CPU s
 /// for 0.945 M and 1.587 M; the two equations a·rays + b·shadow = CPU give a = 1.25 µs,
 /// b = 0.31 µs, b / a = 0.25.
-pub const SHADOW_QUERY_COST: f64 = 0.25;
+pub const SHADOW_QUERY_COST: f64 = 0.16;
 
 /// Generated frames with the path strategies after which one frame is generated with all
 /// of BDPT's to measure both again (the comparison needs the light subpaths).
@@ -27,6 +27,11 @@ pub const PROBE_EVERY: u32 = 4;
 /// Floor of a pixel's luminance in the relative variance, as a fraction of the frame's
 /// mean: keeps black pixels from dominating the comparison.
 const DARK_FLOOR: f64 = 0.1;
+
+/// Largest share of the image's light (luminance of BDPT's contributions) that may come
+/// from paths the path strategies cannot make for them to be chosen: the path strategies
+/// would miss it (a bias, not a variance).
+pub const UNREACHABLE_MAX: f64 = 1e-3;
 
 /// The pilot statistics of one generated frame: per pixel of f, its own samples' values
 /// under both estimators and the light-tracing splats it received.
@@ -39,6 +44,18 @@ pub struct Pilot {
     pub pixels: Vec<[f64; 5]>,
     /// Per pixel: Σ (luminance of a light-tracing splat)², unscaled.
     pub splat_sq: Vec<f64>,
+    /// Per pixel: the correction of the path strategies' sampled second moment Σ x_path²,
+    /// i.e. the diagonal terms (each strategy's own second moment, Σ_A w'² f² / p_{s'})
+    /// importance-sampled from every BDPT contribution landing there (camera part and
+    /// splats) minus the same terms as the path samples themselves gave (Σ c_path²). The
+    /// cross terms between path lengths of one camera subpath stay sampled (module doc).
+    pub moment: Vec<f64>,
+    /// Luminance of the contributions whose paths no path strategy can make, and of all.
+    pub unreachable: f64,
+    pub reachable: f64,
+    /// Luminance of the contributions by strategy group: s ≤ 1 (the path strategies),
+    /// s ≥ 2 with t ≥ 2 (connections to light subpaths), t = 1 (light tracing).
+    pub shares: [f64; 3],
     /// Ray-query cost of the frame's own samples in closest-hit units: all of them / only
     /// the path strategies' part (camera subpaths and s ≤ 1 light samples).
     pub cost_bdpt: f64,
@@ -59,11 +76,16 @@ impl Pilot {
             height,
             pixels: vec![[0.0; 5]; n],
             splat_sq: vec![0.0; n],
+            moment: vec![0.0; n],
             ..Default::default()
         }
     }
 
-    pub fn add_sample(&mut self, pixel: u32, bdpt: f64, path: f64) {
+    /// One sample of f in `pixel`: its camera part's luminance with all strategies and with
+    /// the path strategies, and the correction of the path strategies' second moment
+    /// (importance-sampled diagonal terms minus the sample's own: see [`Pilot::moment`]).
+    pub fn add_sample(&mut self, pixel: u32, bdpt: f64, path: f64, moment: f64) {
+        self.moment[pixel as usize] += moment;
         let p = &mut self.pixels[pixel as usize];
         p[0] += bdpt;
         p[1] += bdpt * bdpt;
@@ -72,15 +94,17 @@ impl Pilot {
         p[4] += 1.0;
     }
 
-    /// Relative variance per sample of the two estimators, (bdpt, path), summed over the
+    /// Relative variance per sample of the two estimators, (bdpt, path from the
+    /// importance-sampled second moment, path from its own samples), summed over the
     /// pixels with a common weight per pixel 1 / (μ̂² + (0.1·L̄)²) (μ̂: the 3×3 mean of
     /// the path estimate, L̄: its image mean). Per pixel: the sample variance of its
     /// samples (n ≥ 2), or with one sample x² − x·m(q), m(q) the mean of the next pixel
     /// of the row (an independent sample of a neighbouring mean: unbiased where the image
     /// is locally flat). BDPT's light tracing adds Σ c² / spp per pixel (the splat sum
     /// S/spp over independent light subpaths has variance ≈ Σ c² / spp², i.e. Σ c² / spp
-    /// per sample).
-    pub fn variances(&self, spp: u32) -> (f64, f64) {
+    /// per sample). The importance-sampled path variance is `(Σ x_path² + moment) / n − μ̂²`, μ̂² from
+    /// the path samples' products of distinct samples (n ≥ 2) or with the neighbour's mean.
+    pub fn variances(&self, spp: u32) -> (f64, f64, f64) {
         let (w, h) = (self.width as usize, self.height as usize);
         let mean = |i: usize, k: usize| {
             let p = &self.pixels[i];
@@ -97,13 +121,28 @@ impl Pilot {
                 0.0
             }
         };
+        let square = |i: usize, q: usize| {
+            let p = &self.pixels[i];
+            let n = p[4];
+            if n >= 2.0 {
+                (p[2] * p[2] - p[3]) / (n * (n - 1.0))
+            } else if n == 1.0 {
+                p[2] * mean(q, 2)
+            } else {
+                0.0
+            }
+        };
         let total: f64 = (0..w * h).map(|i| mean(i, 2)).sum();
         let floor = (DARK_FLOOR * total / (w * h).max(1) as f64).powi(2);
-        let (mut vb, mut vp) = (0.0, 0.0);
+        let (mut vb, mut vp, mut vs) = (0.0, 0.0, 0.0);
         for y in 0..h {
             for x in 0..w {
                 let i = y * w + x;
-                let q = if x + 1 < w { i + 1 } else { i.saturating_sub(1) };
+                let q = if x + 1 < w {
+                    i + 1
+                } else {
+                    i.saturating_sub(1)
+                };
                 let mut s = 0.0;
                 let mut c = 0.0;
                 for yy in y.saturating_sub(1)..(y + 2).min(h) {
@@ -115,11 +154,16 @@ impl Pilot {
                 let mu = (s / c).max(0.0);
                 let weight = 1.0 / (mu * mu + floor).max(f64::MIN_POSITIVE);
                 vb += weight * (var(i, q, 0) + self.splat_sq[i] / spp.max(1) as f64);
-                vp += weight * var(i, q, 2);
+                vs += weight * var(i, q, 2);
+                let n = self.pixels[i][4];
+                if n > 0.0 {
+                    let p = &self.pixels[i];
+                    vp += weight * ((p[3] + self.moment[i]) / n - square(i, q));
+                }
             }
         }
         let n = (w * h).max(1) as f64;
-        (vb.max(0.0) / n, vp.max(0.0) / n)
+        (vb.max(0.0) / n, vp.max(0.0) / n, vs.max(0.0) / n)
     }
 }
 
@@ -140,6 +184,17 @@ pub struct StrategyDecision {
     /// strategies.
     pub variance_bdpt: Option<f64>,
     pub variance_path: f64,
+    /// The path strategies' variance from their own samples (the pilot's values under
+    /// their weights): what `variance_path` would be without importance sampling; it
+    /// misses the rare high-valued paths (caustics) that few samples do not meet.
+    pub variance_path_sampled: f64,
+    /// Share of the luminance of BDPT's contributions on paths no path strategy can make
+    /// (e.g. caustics of point lights); above `UNREACHABLE_MAX` BDPT is kept.
+    pub unreachable_share: Option<f64>,
+    /// Share of the image's light (luminance of BDPT's contributions in f) that came from
+    /// the strategies s ≤ 1, from connections s ≥ 2 (t ≥ 2) and from light tracing (t = 1)
+    /// (frames with all strategies).
+    pub contribution_shares: Option<[f64; 3]>,
     /// Cost per sample in closest-hit ray queries (shadow queries count
     /// `SHADOW_QUERY_COST`) of the frame's own samples: all strategies (measured only on
     /// frames generated with them) / the path strategies' part.
@@ -168,17 +223,22 @@ pub fn decide(
     path_run: &mut u32,
 ) -> (bool, StrategyDecision) {
     let samples = pilot.samples.max(1) as f64;
-    let (vb, vp) = pilot.variances(spp);
+    let (vb, vp, vs) = pilot.variances(spp);
     let cost_path = pilot.cost_path / samples;
     let cost_bdpt = pilot.cost_bdpt / samples;
     let name = |p: bool| if p { "path" } else { "bdpt" }.to_string();
     let mut d = StrategyDecision {
         strategies: name(path),
-        variance_path: vp,
+        variance_path: if path { vs } else { vp },
+        variance_path_sampled: vs,
         cost_path,
         ..Default::default()
     };
+    let unreachable = pilot.unreachable / pilot.reachable.max(f64::MIN_POSITIVE);
     if !path {
+        d.unreachable_share = Some(unreachable);
+        let total: f64 = pilot.shares.iter().sum();
+        d.contribution_shares = Some(pilot.shares.map(|x| x / total.max(f64::MIN_POSITIVE)));
         d.variance_bdpt = Some(vb);
         d.cost_bdpt = Some(cost_bdpt);
         d.bdpt_over_path = Some(vb * cost_bdpt / (vp * cost_path).max(f64::MIN_POSITIVE));
@@ -192,7 +252,7 @@ pub fn decide(
         } else {
             (true, "path")
         }
-    } else if vp * cost_path < vb * cost_bdpt {
+    } else if unreachable <= UNREACHABLE_MAX && vp * cost_path < vb * cost_bdpt {
         (true, "path")
     } else {
         (false, "bdpt")

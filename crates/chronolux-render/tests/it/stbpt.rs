@@ -387,8 +387,9 @@ fn stbpt_path_strategies_agree_with_bdpt_on_a_moving_animation() {
 /// the path strategies) agrees with BDPT: the splats are weighted per pixel by the share
 /// of the landings that came from frames with light tracing (module doc, "BDPT or the
 /// path strategies"). Static Cornell box, cap K = 2, starting with the path strategies:
-/// frames 0–3 use them, the fourth asks for a probe, frame 4 has all strategies, so frame
-/// 2 is served by frames 0–4 of both kinds.
+/// frames 0–3 use them, the fourth asks for a probe, frame 4 is a pilot frame (all
+/// strategies at a quarter of the pixels, the path strategies elsewhere), so frame 2 is
+/// served by frames 0–4 of both kinds and frame 4 by samples of both kinds.
 #[test]
 fn stbpt_frames_of_both_strategy_sets_agree_with_bdpt() {
     let (k, spp, runs) = (2u32, 2u32, 12u64);
@@ -450,8 +451,9 @@ fn strategy_reports(
 /// The choice of strategies (module doc, "BDPT or the path strategies"), from the
 /// reports. In the Cornell box (diffuse walls, one area light seen by most of the room)
 /// BDPT's light subpaths and connections cost more than they reduce the variance of what
-/// light sampling and BSDF sampling already find: after the first frame stbpt switches to
-/// the path strategies, keeps them and probes all strategies every `PROBE_EVERY` frames.
+/// light sampling and BSDF sampling already find: after the first (pilot) frame stbpt
+/// switches to the path strategies, keeps them and makes a pilot frame after every
+/// `PROBE_EVERY` frames with them.
 /// With the glass sphere's caustic on the floor (`stage::caustic`, seen directly by a
 /// static camera) light tracing finds the caustic paths that camera paths reach only by
 /// hitting the small light through the glass: stbpt keeps all strategies.
@@ -462,25 +464,27 @@ fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
     for (f, d) in cornell.iter().enumerate() {
         eprintln!("cornell box, frame {f}: {d:?}");
     }
+    // Frame 0 is a pilot frame (all strategies at a quarter of the pixels).
     let d0 = &cornell[0];
     assert_eq!(
         (d0.strategies.as_str(), d0.next.as_str()),
-        ("bdpt", "path"),
+        ("pilot", "path"),
         "{d0:?}"
     );
     assert!(d0.bdpt_over_path.expect("measured with all strategies") > 1.0);
     for d in &cornell[1..5] {
         assert_eq!(d.strategies, "path", "{d:?}");
-        assert!(d.variance_bdpt.is_none());
+        assert!(d.variance_bdpt.is_none() && d.variance_path.is_none());
     }
     assert_eq!(cornell[4].decision, "probe");
-    assert_eq!(cornell[5].strategies, "bdpt");
+    assert_eq!(cornell[5].strategies, "pilot");
     let caustic = strategy_reports(stage::caustic(), 24.0, 3, k, spp);
     for (f, d) in caustic.iter().enumerate() {
         eprintln!("caustic, frame {f}: {d:?}");
+        let made = if f == 0 { "pilot" } else { "bdpt" };
         assert_eq!(
             (d.strategies.as_str(), d.next.as_str()),
-            ("bdpt", "bdpt"),
+            (made, "bdpt"),
             "{d:?}"
         );
         assert!(d.bdpt_over_path.expect("measured") < 1.0);

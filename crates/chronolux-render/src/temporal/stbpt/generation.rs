@@ -7,7 +7,7 @@
 
 use super::landing::{Landing, Walk, barycentrics};
 use super::reuse::Regenerated;
-use super::strategies::{self, Pilot, SHADOW_QUERY_COST, luminance};
+use super::strategies::{self, Mode, Pilot, SHADOW_QUERY_COST, luminance, pilot_pixel};
 use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH, adapt};
 use crate::bdpt::{
     BdptSettings, Connection, MisHeuristic, Vertex, VertexKind, connect_with,
@@ -251,8 +251,12 @@ pub(super) struct TileOut {
     /// Pilot: luminance of f's own contributions by strategy group: s ≤ 1 (t ≥ 2), s ≥ 2
     /// with t ≥ 2 (connections), t = 1 (light tracing).
     pub(super) shares: [f64; 3],
-    /// Cost (closest-hit units) of the path strategies' part of f's own samples.
-    pub(super) path_cost: f64,
+    /// Cost (closest-hit units) of the pilot samples' own-frame work, all of it and the
+    /// path strategies' part, and their number; the same for f's other samples.
+    pub(super) pilot_cost: [f64; 2],
+    pub(super) pilot_n: u64,
+    pub(super) other_cost: f64,
+    pub(super) other_n: u64,
     pub(super) landings: Vec<Landed>,
     pub(super) stats: Vec<Stats>,
     pub(super) counts: Counts,
@@ -658,9 +662,9 @@ impl Generation<'_> {
                 own += e.c;
             }
         }
-        {
-            let (path_value, path_cost, path_moment) = pilot;
-            out.path_cost += path_cost;
+        let (path_value, path_cost, path_moment) = pilot;
+        if self.pilot {
+            out.pilot_cost[1] += path_cost;
             if own.is_finite() && path_value.is_finite() {
                 let (w, h) = (scene_f.camera.width, scene_f.camera.height);
                 let pixel = (raster.y as u32).min(h - 1) * w + (raster.x as u32).min(w - 1);
@@ -681,6 +685,14 @@ impl Generation<'_> {
         let record = (n > 1).then_some(&mut sc.splats);
         self.light_trace(jf, light, cam, &ns, 2, out, &mut inv, record);
         out.counts.invalid[jf] += inv;
+        let own_cost = query_cost(&out.stats[jf]) - cost0;
+        if self.pilot {
+            out.pilot_cost[0] += own_cost;
+            out.pilot_n += 1;
+        } else {
+            out.other_cost += own_cost;
+            out.other_n += 1;
+        }
 
         // Other frames of the window.
         let walk = Walk {
@@ -902,12 +914,11 @@ impl Stbpt {
         // A moving camera turns light tracing off for the whole sequence (module doc,
         // "Bias"): the weights of the kept strategies then sum to one in every frame. The
         // path strategies have none.
-        let path = self.path_next;
+        let mode = self.mode_next;
+        let light_tracing = self.settings.bdpt.light_tracing && !source.builder().camera_may_move();
         let bdpt = BdptSettings {
-            light_tracing: self.settings.bdpt.light_tracing
-                && !source.builder().camera_may_move()
-                && !path,
-            path_strategies: path,
+            light_tracing,
+            path_strategies: false,
             ..self.settings.bdpt.clone()
         };
         let path_bdpt = BdptSettings {
@@ -915,7 +926,8 @@ impl Stbpt {
             path_strategies: true,
             ..bdpt.clone()
         };
-        let gen_ = Generation {
+        let adaptive = self.settings.adaptive;
+        let gen_all = Generation {
             same_camera,
             bdpt: &bdpt,
             frames: &frames,
@@ -929,8 +941,20 @@ impl Stbpt {
             from_f: &from_f,
             steps: &steps,
             path_bdpt: &path_bdpt,
-            pilot: self.settings.adaptive && !path,
-            count_lt: bdpt.light_tracing && self.settings.adaptive,
+            pilot: adaptive,
+            count_lt: light_tracing && adaptive,
+        };
+        let gen_path = Generation {
+            bdpt: &path_bdpt,
+            pilot: false,
+            count_lt: false,
+            ..gen_all
+        };
+        // Which samples use all strategies, and their share of the frame's samples.
+        let all_at = |x: u32, y: u32| match mode {
+            Mode::Bdpt => true,
+            Mode::Path => false,
+            Mode::Pilot => pilot_pixel(x, y),
         };
         let cam = &scenes[jf].camera;
         let (w, h) = (cam.width, cam.height);
@@ -945,6 +969,11 @@ impl Stbpt {
         let mut counts = Counts::new(n);
         let mut stats = vec![Stats::default(); n];
         let mut pilot = Pilot::new(w, h);
+        let with_all = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| all_at(x, y))
+            .count();
+        let rho = with_all as f64 / (w as f64 * h as f64).max(1.0);
         for (s, first) in
             (0..spp).flat_map(|s| (0..n_tiles).step_by(TILES_PER_BATCH).map(move |t| (s, t)))
         {
@@ -965,12 +994,16 @@ impl Stbpt {
                     unreachable: 0.0,
                     reachable: 0.0,
                     shares: [0.0; 3],
-                    path_cost: 0.0,
+                    pilot_cost: [0.0; 2],
+                    pilot_n: 0,
+                    other_cost: 0.0,
+                    other_n: 0,
                 };
                 let mut sc = Scratch::default();
                 for y in y0..y0 + th {
                     for x in x0..x0 + tw {
-                        gen_.sample(x, y, s, &mut sc, &mut out);
+                        let g = if all_at(x, y) { &gen_all } else { &gen_path };
+                        g.sample(x, y, s, &mut sc, &mut out);
                     }
                 }
                 let np = (tw * th) as u64;
@@ -992,16 +1025,22 @@ impl Stbpt {
                     pilot.add_sample(pixel, b, p, m);
                 }
                 for &(pixel, m) in &r.pilot_splats {
-                    pilot.moment[pixel as usize] += m;
+                    pilot.moment[pixel as usize] += m / rho;
                 }
                 pilot.unreachable += r.unreachable;
                 pilot.reachable += r.reachable;
                 for (a, b) in pilot.shares.iter_mut().zip(r.shares) {
                     *a += b;
                 }
-                pilot.cost_path += r.path_cost;
+                pilot.cost_bdpt += r.pilot_cost[0];
+                pilot.cost_path += r.pilot_cost[1];
+                pilot.samples += r.pilot_n;
+                pilot.other_cost += r.other_cost;
+                pilot.other_samples += r.other_n;
+                // Splats come from a share rho of the samples' light subpaths: scaled to
+                // what every sample's would give.
                 for c in r.splats.iter().filter(|c| c.splat && c.frame == f) {
-                    pilot.splat_sq[c.pixel as usize] += luminance(c.value).powi(2);
+                    pilot.splat_sq[c.pixel as usize] += luminance(c.value).powi(2) / rho;
                 }
             }
         }
@@ -1014,20 +1053,14 @@ impl Stbpt {
             p.retraced += counts.retraced[j];
             p.invalid += counts.invalid[j];
             p.served_by += 1;
-            p.served_by_lt += u32::from(bdpt.light_tracing);
-            p.served_by_light += u32::from(!path);
+            if light_tracing {
+                p.served_by_lt += rho;
+            }
+            p.served_by_light += rho;
         }
         let generated = (w as u64 * h as u64 * spp as u64).max(1);
-        pilot.samples = generated;
-        pilot.cost_bdpt = query_cost(&stats[jf]);
-        let (next, strategy) = strategies::decide(
-            &pilot,
-            spp,
-            path,
-            self.settings.adaptive,
-            &mut self.path_run,
-        );
-        self.path_next = next;
+        let (next, strategy) = strategies::decide(&pilot, spp, mode, adaptive, &mut self.path_run);
+        self.mode_next = next;
         self.strategy_decisions.insert(f, strategy);
         self.served.insert(
             f,

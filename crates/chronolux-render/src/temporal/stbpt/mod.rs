@@ -175,21 +175,26 @@
 //! # BDPT or the path strategies
 //!
 //! **Why BDPT loses to `path` on some scenes.** Measured on the skinned RiggedSimple in the
-//! Cornell stage (64×64, frames 0–3, 8 spp, `--threads 1`, ray queries from `run.json`):
-//! a BDPT sample costs 2.2× a `path` sample (1.63 against 0.73 CPU s). Its camera walk and
-//! light samples (s ≤ 1) are `path`'s own work (0.49 M closest-hit, 0.32 M shadow
-//! queries); on top come the light subpaths (+0.46 M closest-hit queries, 94 % of the
-//! camera walks'), the connections s ≥ 2 (+0.91 M shadow queries, with their MIS weights
-//! and BSDF evaluations) and light tracing (+0.36 M). What this buys is small there:
-//! measured per sample on the same camera subpaths (the pilot below), BDPT's relative
-//! variance is 0.24 against 0.44 for the path strategies alone, 1.85× lower for 2.25× the
-//! cost. The room is diffuse and lit by a large ceiling light that light sampling finds
-//! from almost every camera vertex; the connections' and light tracing's share of the
-//! image (`contribution_shares` in `run.json`) is mostly light the path strategies already
-//! sample well, so MIS moves weight between strategies without finding new paths. Where
-//! a glass sphere focuses the light (the demo, `builtin:caustic`), camera paths find the
+//! Cornell stage (64×64, frames 0–7, 8 spp, `--threads 1`; CPU s from `bench quality`,
+//! ray queries from `run.json`; `bench-results/2026-12-02-stbpt2/cost-calibration/`): a
+//! BDPT sample costs 4.2× a `path` sample (3.33 against 0.79 CPU s). Its camera walk and
+//! light samples (s ≤ 1) are `path`'s own work (0.98 M closest-hit, 0.65 M shadow
+//! queries); on top come the light subpaths (+0.92 M closest-hit queries, 94 % of the
+//! camera walks') and +2.55 M connections, about 30 % of them light tracing (t = 1) and the
+//! rest s ≥ 2, t ≥ 2, each with its BSDF evaluations and an MIS weight over the whole path
+//! (fitted: 0.95 µs per connection against 0.25 µs per closest-hit query, see
+//! [`strategies::SHADOW_QUERY_COST`]): the connections are three quarters of BDPT's time
+//! there. What they buy is small: the strategies s ≥ 2 carry about a third of the image's
+//! light (`contribution_shares` in `run.json`: 66 % s ≤ 1, 10 % connections, 24 % light
+//! tracing, much as on the demo), but it is light the path strategies also sample well,
+//! so MIS only moves weight between strategies: measured per sample on the same camera
+//! subpaths (the pilot below), BDPT's relative variance is 0.29–0.33 against 0.5–0.7 for
+//! the path strategies, 1.7–2.2× lower for 4× the cost. The room is diffuse and lit by a
+//! large ceiling light that light sampling finds from almost every camera vertex. Where a
+//! glass sphere focuses the light (the demo, `builtin:caustic`), camera paths find the
 //! caustic only by hitting the lamp through the glass: the path strategies' variance is
-//! 10–40× BDPT's and BDPT wins.
+//! 10–90× BDPT's (importance-sampled, below; 1.3–6× as sampled from their own few
+//! samples, which rarely meet those paths) and BDPT wins.
 //!
 //! **The path strategies** ([`BdptSettings::path_strategies`]): the same camera subpath,
 //! only the strategies s = 0 (the walk hits an emitter) and s = 1 (a light sample at each
@@ -202,11 +207,16 @@
 //! x1 from the camera: also with a moving camera).
 //!
 //! **The decision**, per generated frame, from counts and sample values of the frame's own
-//! samples ([`strategies::decide`]): a frame generated with all strategies also evaluates,
-//! for each sample, the value the path strategies give on the same camera subpath and the
-//! same light samples (s ≤ 1 contributions re-weighted by [`crate::bdpt::mis_weight`]
-//! among themselves: no ray), and counts the cost of both parts (closest-hit queries +
-//! [`strategies::SHADOW_QUERY_COST`] per shadow query, fitted to CPU time). Variances are
+//! samples ([`strategies::decide`]): a sample made with all strategies also evaluates the
+//! value the path strategies give on the same camera subpath and the same light samples
+//! (s ≤ 1 contributions re-weighted by [`crate::bdpt::mis_weight`] among themselves: no
+//! ray), and counts the cost of both parts (closest-hit queries +
+//! [`strategies::SHADOW_QUERY_COST`] per shadow query, fitted to CPU time). The first
+//! generated frame, and one after every [`strategies::PROBE_EVERY`] frames with the path
+//! strategies, is a **pilot frame**: all strategies and these measurements at a quarter
+//! of the pixels ([`strategies::pilot_pixel`]: horizontal pairs, spread over the image),
+//! the path strategies elsewhere, so measuring costs a quarter of a BDPT frame's extra
+//! work; a frame with all strategies measures at every pixel. Variances are
 //! of the luminance, relative (per pixel divided by the local mean², floored at 0.1 of the
 //! frame mean), per sample; BDPT's includes its light-tracing splats (Σ c² / spp per
 //! pixel). The path strategies' variance from their own few samples would miss exactly
@@ -219,21 +229,26 @@
 //! contributions from paths no path strategy can make (delta lights behind specular
 //! surfaces) count as `unreachable_share`: above [`strategies::UNREACHABLE_MAX`], BDPT is
 //! kept whatever the variances. The next frame uses the path strategies iff
-//! variance_path × cost_path < variance_bdpt × cost_bdpt; after [`strategies::PROBE_EVERY`]
-//! frames with them, one frame is generated with all strategies to measure again. The
+//! variance_path × cost_path < variance_bdpt × cost_bdpt, else all strategies; after
+//! [`strategies::PROBE_EVERY`] frames with the path strategies a pilot frame measures
+//! again. The
 //! figures are in `run.json` per frame (`strategy_decision`, beside `reuse_decision`). The
 //! comparison is of the frame's own samples: it assumes a landing in another frame is
 //! worth the same share of a fresh sample with either strategy set, and it leaves the
-//! pilot's own work (≈ 8 % of a BDPT frame's CPU on the demo) in BDPT's cost.
+//! pilot's own work (≈ 8 % of a BDPT frame's CPU on the demo) in BDPT's cost. Relative
+//! variance weighs pixels by 1 / (local mean)², a stand-in for FLIP's perceptual error,
+//! not FLIP itself.
 //!
-//! **Frames served by both kinds.** A frame g may be served by generated frames with light
-//! tracing (BDPT, static camera) and without it (path strategies): the first estimate the
-//! radiance minus its light-tracing share at their landings, the others all of it. Each
-//! landing of a frame with light tracing is counted per pixel (in the splat film's
-//! weights); the splats, averaged over the frames with light tracing, are weighted per
-//! pixel by the share n_lt / n of the landings there that came from those frames, so the
-//! pixel's expectation is (n_lt (μ − μ_lt) + (n − n_lt) μ) / n + (n_lt / n) μ_lt = μ
-//! (test `stbpt_frames_of_both_strategy_sets_agree_with_bdpt`).
+//! **Samples of both kinds.** A frame g may be served by samples with light tracing (all
+//! strategies, static camera) and without it (path strategies), from different generated
+//! frames or within a pilot frame: the first estimate the radiance minus its
+//! light-tracing share at their landings, the others all of it. Each landing of a sample
+//! with light tracing is counted per pixel (in the splat film's weights); the splats,
+//! normalised by the light subpaths that made them (spp × the summed share ρ of samples
+//! with light tracing of the serving frames), are weighted per pixel by the share
+//! n_lt / n of the landings there that had light tracing, so the pixel's expectation is
+//! (n_lt (μ − μ_lt) + (n − n_lt) μ) / n + (n_lt / n) μ_lt = μ (test
+//! `stbpt_frames_of_both_strategy_sets_agree_with_bdpt`).
 //!
 //! [`BdptSettings::path_strategies`]: crate::bdpt::BdptSettings::path_strategies
 //!
@@ -353,10 +368,11 @@ struct Pending {
     invalid: u64,
     /// Generated frames whose samples served this frame.
     served_by: u32,
-    /// Of those, generated with light tracing (their splats: `spp` light subpaths per
-    /// pixel each) / with light subpaths (all BDPT strategies).
-    served_by_lt: u32,
-    served_by_light: u32,
+    /// Of those, the share of samples generated with light tracing (their splats: `spp`
+    /// light subpaths per pixel for a whole frame) / with light subpaths (all BDPT
+    /// strategies), summed over the generated frames (a pilot frame counts its share).
+    served_by_lt: f64,
+    served_by_light: f64,
 }
 
 /// Spatio-temporal BDPT; see the module documentation.
@@ -383,9 +399,8 @@ pub struct Stbpt {
     zero_run: u32,
     /// The self-assessment of each generated frame, until the frame is output.
     decisions: BTreeMap<u32, adapt::WindowDecision>,
-    /// The next generated frame uses only the path strategies (module doc, "BDPT or the
-    /// path strategies").
-    path_next: bool,
+    /// How the next generated frame is made (module doc, "BDPT or the path strategies").
+    mode_next: strategies::Mode,
     /// Consecutive generated frames with the path strategies ([`strategies::decide`]).
     path_run: u32,
     /// The choice of strategies of each generated frame, until the frame is output.
@@ -399,7 +414,13 @@ impl Stbpt {
             k_next,
             zero_run: 0,
             decisions: BTreeMap::new(),
-            path_next: settings.bdpt.path_strategies,
+            mode_next: if settings.bdpt.path_strategies {
+                strategies::Mode::Path
+            } else if settings.adaptive {
+                strategies::Mode::Pilot
+            } else {
+                strategies::Mode::Bdpt
+            },
             path_run: 0,
             strategy_decisions: BTreeMap::new(),
             settings,
@@ -498,19 +519,23 @@ impl SequenceRenderer for Stbpt {
         // The splats are the light-tracing share of the frames with light tracing: mean
         // over their light subpaths, weighted per pixel by their landings' share (module
         // doc, "BDPT or the path strategies"); all of the pixel when every frame had it.
-        let lt = p.served_by_lt.max(1);
-        let splat_scale = 1.0 / (spp as f32 * lt as f32);
+        let lt = p.served_by_lt;
+        let splat_scale = if lt > 0.0 {
+            (1.0 / (spp as f64 * lt)) as f32
+        } else {
+            0.0
+        };
         let (mut splats, lt_landed) = self
             .film_splat
             .as_mut()
             .expect("opened")
             .finish(frame, splat_scale);
-        if p.served_by_lt != 0 && p.served_by_lt != window {
+        if lt > 0.0 && lt != window as f64 {
             for ((s, &nb), &n) in splats.iter_mut().zip(&lt_landed).zip(&weights) {
                 *s *= if n > 0.0 {
                     nb / n
                 } else {
-                    p.served_by_lt as f32 / window as f32
+                    (lt / window as f64) as f32
                 };
             }
         }
@@ -545,7 +570,7 @@ impl SequenceRenderer for Stbpt {
             reused_partially: p.partial,
             retraced: p.retraced,
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
-            light_subpaths_per_pixel: spp as f64 * p.served_by_light as f64,
+            light_subpaths_per_pixel: spp as f64 * p.served_by_light,
             film: self.film_stats(),
         };
         self.served.retain(|&f, _| f + k >= frame);

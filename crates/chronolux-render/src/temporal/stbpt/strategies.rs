@@ -11,18 +11,54 @@
 
 use chronolux_core::color::Rgb;
 
-/// Cost of a shadow-ray query (a connection or light sample with its MIS weight and BSDF
-/// evaluations) relative to a closest-hit query (a walk's segment with its surface
-/// interaction and BSDF sampling). Measured: `path` and `bdpt` at 8 spp on RiggedSimple
-/// `--stage cornell`, 64×64, frames 0–3, `--threads 1`, one run each (load 2.3):
-/// path 0.71 CPU s for 0.488 M closest-hit and 0.321 M shadow queries, bdpt 1.67 CPU s
-/// for 0.945 M and 1.587 M; the two equations a·rays + b·shadow = CPU give a = 1.25 µs,
-/// b = 0.31 µs, b / a = 0.25.
-pub const SHADOW_QUERY_COST: f64 = 0.16;
+/// Cost of a shadow-ray query (standing for its whole connection or light sample: BSDF
+/// evaluations, the MIS weight over the path, the query) relative to a closest-hit query
+/// (a walk's segment with its surface interaction and BSDF sampling). Fitted (least
+/// squares, CPU = a·closest-hit + b·shadow) to `path` and `bdpt` at 8 spp on RiggedSimple
+/// `--stage cornell`, cornell-moving and the demo (64×64, frames 0–7, `--threads 1`, CPU s
+/// from `bench quality`, query counts from `render`'s `run.json`; one run each, load
+/// 3–4; `bench-results/2026-12-02-stbpt2/cost-calibration/`): a = 0.25 µs, b = 0.95 µs,
+/// b / a = 3.9. With it the query counts give BDPT / path cost ratios of 4.10, 2.63 and
+/// 3.91 against the measured 4.22, 2.63 and 3.71.
+pub const SHADOW_QUERY_COST: f64 = 3.9;
 
-/// Generated frames with the path strategies after which one frame is generated with all
-/// of BDPT's to measure both again (the comparison needs the light subpaths).
+/// Generated frames with the path strategies after which one pilot frame is generated to
+/// measure both again (the comparison needs the light subpaths).
 pub const PROBE_EVERY: u32 = 4;
+
+/// In a pilot frame, one pixel pair in `PILOT_EVERY` uses all strategies ([`pilot_pixel`]).
+pub const PILOT_EVERY: u32 = 4;
+
+/// How a generated frame's samples are made.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// All strategies, every sample (with the pilot's measurements when adaptive).
+    Bdpt,
+    /// The path strategies, every sample.
+    Path,
+    /// All strategies (and the measurements) at the [`pilot_pixel`]s, the path
+    /// strategies elsewhere: what the comparison needs at a quarter of its cost.
+    Pilot,
+}
+
+impl Mode {
+    fn name(self) -> String {
+        match self {
+            Mode::Bdpt => "bdpt",
+            Mode::Path => "path",
+            Mode::Pilot => "pilot",
+        }
+        .to_string()
+    }
+}
+
+/// The pixels of a pilot frame whose samples use all strategies: horizontal pairs (x, x ^ 1),
+/// one pair in [`PILOT_EVERY`] along each row, shifted by one pair per row. Pairs, so that
+/// a pixel's neighbour sample (one sample per pixel, [`Pilot::variances`]) is a pilot
+/// sample too.
+pub fn pilot_pixel(x: u32, y: u32) -> bool {
+    ((x >> 1) + y).is_multiple_of(PILOT_EVERY)
+}
 
 /// Floor of a pixel's luminance in the relative variance, as a fraction of the frame's
 /// mean: keeps black pixels from dominating the comparison.
@@ -56,11 +92,15 @@ pub struct Pilot {
     /// Luminance of the contributions by strategy group: s ≤ 1 (the path strategies),
     /// s ≥ 2 with t ≥ 2 (connections to light subpaths), t = 1 (light tracing).
     pub shares: [f64; 3],
-    /// Ray-query cost of the frame's own samples in closest-hit units: all of them / only
-    /// the path strategies' part (camera subpaths and s ≤ 1 light samples).
+    /// Ray-query cost of the pilot samples' own-frame work in closest-hit units: all of
+    /// it / only the path strategies' part (camera subpaths and s ≤ 1 light samples), and
+    /// the number of pilot samples.
     pub cost_bdpt: f64,
     pub cost_path: f64,
     pub samples: u64,
+    /// The same cost and count for the frame's other samples.
+    pub other_cost: f64,
+    pub other_samples: u64,
 }
 
 /// Luminance (Rec. 709).
@@ -95,15 +135,18 @@ impl Pilot {
     }
 
     /// Relative variance per sample of the two estimators, (bdpt, path from the
-    /// importance-sampled second moment, path from its own samples), summed over the
-    /// pixels with a common weight per pixel 1 / (μ̂² + (0.1·L̄)²) (μ̂: the 3×3 mean of
-    /// the path estimate, L̄: its image mean). Per pixel: the sample variance of its
-    /// samples (n ≥ 2), or with one sample x² − x·m(q), m(q) the mean of the next pixel
-    /// of the row (an independent sample of a neighbouring mean: unbiased where the image
-    /// is locally flat). BDPT's light tracing adds Σ c² / spp per pixel (the splat sum
-    /// S/spp over independent light subpaths has variance ≈ Σ c² / spp², i.e. Σ c² / spp
-    /// per sample). The importance-sampled path variance is `(Σ x_path² + moment) / n − μ̂²`, μ̂² from
-    /// the path samples' products of distinct samples (n ≥ 2) or with the neighbour's mean.
+    /// importance-sampled second moment, path from its own samples), averaged over the
+    /// measured pixels with a common weight per pixel 1 / (μ̂² + (0.1·L̄)²) (μ̂: the mean
+    /// of the path estimate over the measured pixels of the 5×5 neighbourhood, the pixel
+    /// included; L̄: the image mean). Per pixel: the sample variance of its samples
+    /// (n ≥ 2), or with one sample x² − x·m(q), m(q) the mean of its pair partner (an
+    /// independent sample of a neighbouring mean: unbiased where the image is locally
+    /// flat). BDPT's light tracing adds Σ c² / spp per pixel (the splat sum S/spp over
+    /// independent light subpaths has variance ≈ Σ c² / spp², i.e. Σ c² / spp per
+    /// sample; in a pilot frame the splats come from a share of the samples and are scaled
+    /// up by it). The importance-sampled path variance is `(Σ x_path² + moment) / n − μ̂²`,
+    /// μ̂² from the path samples' products of distinct samples (n ≥ 2) or with the
+    /// partner's mean.
     pub fn variances(&self, spp: u32) -> (f64, f64, f64) {
         let (w, h) = (self.width as usize, self.height as usize);
         let mean = |i: usize, k: usize| {
@@ -132,26 +175,36 @@ impl Pilot {
                 0.0
             }
         };
+        let measured = (0..w * h).filter(|&i| self.pixels[i][4] > 0.0).count();
         let total: f64 = (0..w * h).map(|i| mean(i, 2)).sum();
-        let floor = (DARK_FLOOR * total / (w * h).max(1) as f64).powi(2);
+        let floor = (DARK_FLOOR * total / measured.max(1) as f64).powi(2);
         let (mut vb, mut vp, mut vs) = (0.0, 0.0, 0.0);
         for y in 0..h {
             for x in 0..w {
                 let i = y * w + x;
-                let q = if x + 1 < w {
-                    i + 1
+                if self.pixels[i][4] == 0.0 {
+                    continue;
+                }
+                // The pair partner (a pilot pixel too), else the previous pixel.
+                let q = if (x ^ 1) < w {
+                    y * w + (x ^ 1)
                 } else {
                     i.saturating_sub(1)
                 };
+                // The local mean over the measured pixels around, the pixel included
+                // (without it, a pixel on an emitter's edge next to a dark partner would
+                // get a weight for the dark).
                 let mut s = 0.0;
                 let mut c = 0.0;
-                for yy in y.saturating_sub(1)..(y + 2).min(h) {
-                    for xx in x.saturating_sub(1)..(x + 2).min(w) {
-                        s += mean(yy * w + xx, 2);
-                        c += 1.0;
+                for yy in y.saturating_sub(2)..(y + 3).min(h) {
+                    for xx in x.saturating_sub(2)..(x + 3).min(w) {
+                        if self.pixels[yy * w + xx][4] > 0.0 {
+                            s += mean(yy * w + xx, 2);
+                            c += 1.0;
+                        }
                     }
                 }
-                let mu = (s / c).max(0.0);
+                let mu = if c > 0.0 { (s / c).max(0.0) } else { 0.0 };
                 let weight = 1.0 / (mu * mu + floor).max(f64::MIN_POSITIVE);
                 vb += weight * (var(i, q, 0) + self.splat_sq[i] / spp.max(1) as f64);
                 vs += weight * var(i, q, 2);
@@ -162,7 +215,7 @@ impl Pilot {
                 }
             }
         }
-        let n = (w * h).max(1) as f64;
+        let n = measured.max(1) as f64;
         (vb.max(0.0) / n, vp.max(0.0) / n, vs.max(0.0) / n)
     }
 }
@@ -171,11 +224,13 @@ impl Pilot {
 /// `run.json` record).
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StrategyDecision {
-    /// Strategies the frame's samples were generated with: `bdpt` or `path`.
+    /// Strategies the frame's samples were generated with: `bdpt`, `path` or `pilot`
+    /// (all strategies at a quarter of the pixels, [`pilot_pixel`], the path strategies
+    /// elsewhere).
     pub strategies: String,
     /// Strategies of the next generated frame.
     pub next: String,
-    /// Why: `bdpt` / `path` (the comparison below chose them), `probe` (all strategies
+    /// Why: `bdpt` / `path` (the comparison below chose them), `probe` (a pilot frame
     /// after `PROBE_EVERY` frames with the path strategies, to measure again), `path`
     /// kept between probes, `fixed` (no adaptation).
     pub decision: String,
@@ -183,11 +238,11 @@ pub struct StrategyDecision {
     /// all strategies (measured only on frames generated with them) and with the path
     /// strategies.
     pub variance_bdpt: Option<f64>,
-    pub variance_path: f64,
+    pub variance_path: Option<f64>,
     /// The path strategies' variance from their own samples (the pilot's values under
     /// their weights): what `variance_path` would be without importance sampling; it
     /// misses the rare high-valued paths (caustics) that few samples do not meet.
-    pub variance_path_sampled: f64,
+    pub variance_path_sampled: Option<f64>,
     /// Share of the luminance of BDPT's contributions on paths no path strategy can make
     /// (e.g. caustics of point lights); above `UNREACHABLE_MAX` BDPT is kept.
     pub unreachable_share: Option<f64>,
@@ -205,37 +260,39 @@ pub struct StrategyDecision {
     pub bdpt_over_path: Option<f64>,
 }
 
-/// Decides the strategies of the next generated frame from `pilot` (f's own samples, `spp`
-/// per pixel), which were generated with the path strategies iff `path`. `path_run` counts
-/// the consecutive generated frames with the path strategies (updated here). Without
-/// `adaptive` the strategies stay those of the settings (`fixed`).
+/// Decides how the next generated frame is made from `pilot` (f's own samples, `spp` per
+/// pixel; `mode`: how f was made). `path_run` counts the consecutive generated frames with
+/// the path strategies (updated here). Without `adaptive` the mode stays (`fixed`).
 ///
-/// Rule: after a frame with all strategies, the next uses the path strategies iff
-/// variance_path × cost_path < variance_bdpt × cost_bdpt (equal efficiency keeps BDPT).
-/// After a frame with the path strategies nothing can be compared: the path strategies
-/// are kept, and after `PROBE_EVERY` such frames one frame is generated with all
-/// strategies to measure again.
+/// Rule: after a frame with measurements (all strategies or pilot), the next uses the path
+/// strategies iff variance_path × cost_path < variance_bdpt × cost_bdpt and the share of
+/// light they cannot reach is at most `UNREACHABLE_MAX` (equal efficiency keeps BDPT),
+/// else all strategies. After a frame with the path strategies nothing can be compared:
+/// they are kept, and after `PROBE_EVERY` such frames a pilot frame measures again.
 pub fn decide(
     pilot: &Pilot,
     spp: u32,
-    path: bool,
+    mode: Mode,
     adaptive: bool,
     path_run: &mut u32,
-) -> (bool, StrategyDecision) {
-    let samples = pilot.samples.max(1) as f64;
+) -> (Mode, StrategyDecision) {
     let (vb, vp, vs) = pilot.variances(spp);
-    let cost_path = pilot.cost_path / samples;
-    let cost_bdpt = pilot.cost_bdpt / samples;
-    let name = |p: bool| if p { "path" } else { "bdpt" }.to_string();
+    let measured = mode != Mode::Path && pilot.samples > 0;
+    let cost_path = if measured {
+        pilot.cost_path / pilot.samples as f64
+    } else {
+        pilot.other_cost / pilot.other_samples.max(1) as f64
+    };
+    let cost_bdpt = pilot.cost_bdpt / pilot.samples.max(1) as f64;
     let mut d = StrategyDecision {
-        strategies: name(path),
-        variance_path: if path { vs } else { vp },
-        variance_path_sampled: vs,
+        strategies: mode.name(),
+        variance_path: measured.then_some(vp),
+        variance_path_sampled: measured.then_some(vs),
         cost_path,
         ..Default::default()
     };
     let unreachable = pilot.unreachable / pilot.reachable.max(f64::MIN_POSITIVE);
-    if !path {
+    if measured {
         d.unreachable_share = Some(unreachable);
         let total: f64 = pilot.shares.iter().sum();
         d.contribution_shares = Some(pilot.shares.map(|x| x / total.max(f64::MIN_POSITIVE)));
@@ -244,23 +301,23 @@ pub fn decide(
         d.bdpt_over_path = Some(vb * cost_bdpt / (vp * cost_path).max(f64::MIN_POSITIVE));
     }
     let (next, why) = if !adaptive {
-        (path, "fixed")
-    } else if path {
+        (mode, "fixed")
+    } else if !measured {
         *path_run += 1;
         if *path_run >= PROBE_EVERY {
-            (false, "probe")
+            (Mode::Pilot, "probe")
         } else {
-            (true, "path")
+            (Mode::Path, "path")
         }
     } else if unreachable <= UNREACHABLE_MAX && vp * cost_path < vb * cost_bdpt {
-        (true, "path")
+        (Mode::Path, "path")
     } else {
-        (false, "bdpt")
+        (Mode::Bdpt, "bdpt")
     };
-    if !next {
+    if next != Mode::Path {
         *path_run = 0;
     }
-    d.next = name(next);
+    d.next = next.name();
     d.decision = why.to_string();
     (next, d)
 }

@@ -18,7 +18,7 @@ use chronolux_render::bdpt::{Bdpt, BdptSettings};
 use chronolux_render::integrator::{Integrator, RenderedFrame};
 use chronolux_render::sequence::{ReuseStats, SequenceRenderer};
 use chronolux_render::temporal::stbpt::adapt::WindowDecision;
-use chronolux_render::temporal::stbpt::strategies::StrategyDecision;
+use chronolux_render::temporal::stbpt::strategies::{SWITCH_MARGIN, StrategyDecision};
 use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings};
 
 const W: u32 = 32;
@@ -471,7 +471,7 @@ fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
         ("pilot", "path"),
         "{d0:?}"
     );
-    assert!(d0.bdpt_over_path.expect("measured with all strategies") > 1.0);
+    assert!(d0.bdpt_over_path.expect("measured with all strategies") > SWITCH_MARGIN);
     for d in &cornell[1..5] {
         assert_eq!(d.strategies, "path", "{d:?}");
         assert!(d.variance_bdpt.is_none() && d.variance_path.is_none());

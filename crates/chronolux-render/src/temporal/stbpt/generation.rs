@@ -944,18 +944,26 @@ impl Stbpt {
             pilot: adaptive,
             count_lt: light_tracing && adaptive,
         };
+        // All strategies without the measurements (a frame with all strategies measures
+        // at the pilot pixels only: enough for the comparison, a quarter of its work).
+        let gen_quiet = Generation {
+            pilot: false,
+            ..gen_all
+        };
         let gen_path = Generation {
             bdpt: &path_bdpt,
             pilot: false,
             count_lt: false,
             ..gen_all
         };
-        // Which samples use all strategies, and their share of the frame's samples.
+        // Which samples use all strategies, and their share of the frame's samples; which
+        // are measured, and theirs.
         let all_at = |x: u32, y: u32| match mode {
             Mode::Bdpt => true,
             Mode::Path => false,
             Mode::Pilot => pilot_pixel(x, y),
         };
+        let measured_at = |x: u32, y: u32| mode != Mode::Path && pilot_pixel(x, y);
         let cam = &scenes[jf].camera;
         let (w, h) = (cam.width, cam.height);
         let film = self.film.as_mut().expect("opened");
@@ -974,6 +982,11 @@ impl Stbpt {
             .filter(|&(x, y)| all_at(x, y))
             .count();
         let rho = with_all as f64 / (w as f64 * h as f64).max(1.0);
+        let measured = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| measured_at(x, y))
+            .count();
+        let rho_measured = measured as f64 / (w as f64 * h as f64).max(1.0);
         for (s, first) in
             (0..spp).flat_map(|s| (0..n_tiles).step_by(TILES_PER_BATCH).map(move |t| (s, t)))
         {
@@ -1002,7 +1015,13 @@ impl Stbpt {
                 let mut sc = Scratch::default();
                 for y in y0..y0 + th {
                     for x in x0..x0 + tw {
-                        let g = if all_at(x, y) { &gen_all } else { &gen_path };
+                        let g = if measured_at(x, y) {
+                            &gen_all
+                        } else if all_at(x, y) {
+                            &gen_quiet
+                        } else {
+                            &gen_path
+                        };
                         g.sample(x, y, s, &mut sc, &mut out);
                     }
                 }
@@ -1025,7 +1044,7 @@ impl Stbpt {
                     pilot.add_sample(pixel, b, p, m);
                 }
                 for &(pixel, m) in &r.pilot_splats {
-                    pilot.moment[pixel as usize] += m / rho;
+                    pilot.moment[pixel as usize] += m / rho_measured;
                 }
                 pilot.unreachable += r.unreachable;
                 pilot.reachable += r.reachable;

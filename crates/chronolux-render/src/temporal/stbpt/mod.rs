@@ -216,7 +216,7 @@
 //! strategies, is a **pilot frame**: all strategies and these measurements at a quarter
 //! of the pixels ([`strategies::pilot_pixel`]: horizontal pairs, spread over the image),
 //! the path strategies elsewhere, so measuring costs a quarter of a BDPT frame's extra
-//! work; a frame with all strategies measures at every pixel. Variances are
+//! work; a frame with all strategies measures at the same pixels only. Variances are
 //! of the luminance, relative (per pixel divided by the local mean², floored at 0.1 of the
 //! frame mean), per sample; BDPT's includes its light-tracing splats (Σ c² / spp per
 //! pixel). The path strategies' variance from their own few samples would miss exactly
@@ -229,13 +229,17 @@
 //! contributions from paths no path strategy can make (delta lights behind specular
 //! surfaces) count as `unreachable_share`: above [`strategies::UNREACHABLE_MAX`], BDPT is
 //! kept whatever the variances. The next frame uses the path strategies iff
-//! variance_path × cost_path < variance_bdpt × cost_bdpt, else all strategies; after
+//! [`strategies::SWITCH_MARGIN`] (1.5) × variance_path × cost_path < variance_bdpt ×
+//! cost_bdpt, else all strategies (the margin because the few samples per pixel miss
+//! heavy tails: on the dolly the ratio reached 1.1 where all strategies were better);
+//! after
 //! [`strategies::PROBE_EVERY`] frames with the path strategies a pilot frame measures
 //! again. The
 //! figures are in `run.json` per frame (`strategy_decision`, beside `reuse_decision`). The
 //! comparison is of the frame's own samples: it assumes a landing in another frame is
 //! worth the same share of a fresh sample with either strategy set, and it leaves the
-//! pilot's own work (≈ 8 % of a BDPT frame's CPU on the demo) in BDPT's cost. Relative
+//! pilot's own work (the re-weighting and density ratios at a quarter of the pixels)
+//! in BDPT's cost. Relative
 //! variance weighs pixels by 1 / (local mean)², a stand-in for FLIP's perceptual error,
 //! not FLIP itself.
 //!

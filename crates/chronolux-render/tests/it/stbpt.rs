@@ -451,9 +451,9 @@ fn strategy_reports(
 /// The choice of strategies (module doc, "BDPT or the path strategies"), from the
 /// reports. In the Cornell box (diffuse walls, one area light seen by most of the room)
 /// BDPT's light subpaths and connections cost more than they reduce the variance of what
-/// light sampling and BSDF sampling already find: after the first (pilot) frame stbpt
-/// switches to the path strategies, keeps them and makes a pilot frame after every
-/// `PROBE_EVERY` frames with them.
+/// light sampling and BSDF sampling already find: after the first frame stbpt switches to
+/// the path strategies, keeps them and makes a pilot frame (all strategies at a quarter of
+/// the pixels) after every `PROBE_EVERY` frames with them.
 /// With the glass sphere's caustic on the floor (`stage::caustic`, seen directly by a
 /// static camera) light tracing finds the caustic paths that camera paths reach only by
 /// hitting the small light through the glass: stbpt keeps all strategies.
@@ -464,11 +464,10 @@ fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
     for (f, d) in cornell.iter().enumerate() {
         eprintln!("cornell box, frame {f}: {d:?}");
     }
-    // Frame 0 is a pilot frame (all strategies at a quarter of the pixels).
     let d0 = &cornell[0];
     assert_eq!(
         (d0.strategies.as_str(), d0.next.as_str()),
-        ("pilot", "path"),
+        ("bdpt", "path"),
         "{d0:?}"
     );
     assert!(d0.bdpt_over_path.expect("measured with all strategies") > SWITCH_MARGIN);
@@ -481,10 +480,9 @@ fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
     let caustic = strategy_reports(stage::caustic(), 24.0, 3, k, spp);
     for (f, d) in caustic.iter().enumerate() {
         eprintln!("caustic, frame {f}: {d:?}");
-        let made = if f == 0 { "pilot" } else { "bdpt" };
         assert_eq!(
             (d.strategies.as_str(), d.next.as_str()),
-            (made, "bdpt"),
+            ("bdpt", "bdpt"),
             "{d:?}"
         );
         assert!(d.bdpt_over_path.expect("measured") < 1.0);

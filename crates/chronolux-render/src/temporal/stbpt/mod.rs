@@ -208,42 +208,37 @@
 //!
 //! **The decision**, per generated frame, from counts and sample values of the frame's own
 //! samples ([`strategies::decide`]): a sample made with all strategies also evaluates the
-//! value the path strategies give on the same camera subpath and the same light samples
-//! (s ≤ 1 contributions re-weighted by [`crate::bdpt::mis_weight`] among themselves: no
-//! ray), and counts the cost of both parts (closest-hit queries +
-//! [`strategies::SHADOW_QUERY_COST`] per shadow query, fitted to CPU time), at a quarter
-//! of the pixels ([`strategies::pilot_pixel`]: horizontal pairs, spread over the image).
-//! The first generated frame uses all strategies; one after every
-//! [`strategies::PROBE_EVERY`] frames with the path strategies is a **pilot frame**: all
-//! strategies and the measurements at those pixels, the path strategies elsewhere, so
-//! measuring again costs a quarter of a BDPT frame's extra work. (Starting with a pilot
-//! frame instead cost the demo up to 30 % at equal FLIP: its path samples spread caustic
-//! fireflies over the window.) Variances are
-//! of the luminance, relative (per pixel divided by the local mean², floored at 0.1 of the
-//! frame mean), per sample; BDPT's includes its light-tracing splats (Σ c² / spp per
-//! pixel). The path strategies' variance from their own few samples would miss exactly
-//! what makes them lose: rare high-valued paths (caustics seen through a diffuse
+//! value the path strategies give on the same camera subpath and the same light samples (s
+//! ≤ 1 contributions re-weighted by [`crate::bdpt::mis_weight`] among themselves: no ray),
+//! and counts the cost of both parts (closest-hit queries +
+//! [`strategies::SHADOW_QUERY_COST`] per shadow query, fitted to CPU time), at a quarter of
+//! the pixels ([`strategies::pilot_pixel`]: horizontal pairs, spread over the image). The
+//! first generated frame uses all strategies; one after every [`strategies::PROBE_EVERY`]
+//! frames with the path strategies is a **pilot frame**: all strategies and the
+//! measurements at those pixels, the path strategies elsewhere, so measuring again costs a
+//! quarter of a BDPT frame's extra work. (Starting with a pilot frame instead cost the demo
+//! up to 30 % at equal FLIP: its path samples spread caustic fireflies over the window.)
+//! Variances are of the luminance, relative (per pixel divided by the local mean², floored
+//! at 0.1 of the frame mean), per sample; BDPT's includes its light-tracing splats (Σ c² /
+//! spp per pixel). The path strategies' variance from their own few samples would miss
+//! exactly what makes them lose: rare high-valued paths (caustics seen through a diffuse
 //! surface), which 1–4 samples per pixel seldom meet. So their **diagonal** second moment
 //! (Σ over strategies of w'² f² / p_{s'}) is importance-sampled from every BDPT
-//! contribution (light tracing included), with the density ratios p_{s'} / p_u of the
-//! BDPT path ([`crate::bdpt::strategy_ratios`]), replacing the sampled diagonal terms; the
-//! cross terms between path lengths of one camera walk stay as sampled. BDPT's
-//! contributions from paths no path strategy can make (delta lights behind specular
-//! surfaces) count as `unreachable_share`: above [`strategies::UNREACHABLE_MAX`], BDPT is
-//! kept whatever the variances. The next frame uses the path strategies iff
-//! [`strategies::SWITCH_MARGIN`] (1.5) × variance_path × cost_path < variance_bdpt ×
-//! cost_bdpt, else all strategies (the margin because the few samples per pixel miss
-//! heavy tails: on the dolly the ratio reached 1.1 where all strategies were better);
-//! after
-//! [`strategies::PROBE_EVERY`] frames with the path strategies a pilot frame measures
-//! again. The
-//! figures are in `run.json` per frame (`strategy_decision`, beside `reuse_decision`). The
-//! comparison is of the frame's own samples: it assumes a landing in another frame is
-//! worth the same share of a fresh sample with either strategy set, and it leaves the
-//! pilot's own work (the re-weighting and density ratios at a quarter of the pixels)
-//! in BDPT's cost. Relative
-//! variance weighs pixels by 1 / (local mean)², a stand-in for FLIP's perceptual error,
-//! not FLIP itself.
+//! contribution (light tracing included), with the density ratios p_{s'} / p_u of the BDPT
+//! path ([`crate::bdpt::strategy_ratios`]), replacing the sampled diagonal terms; the cross
+//! terms between path lengths of one camera walk stay as sampled. BDPT's contributions from
+//! paths no path strategy can make (delta lights behind specular surfaces) count as
+//! `unreachable_share`: above [`strategies::UNREACHABLE_MAX`], BDPT is kept whatever the
+//! variances. The next frame uses the path strategies iff [`strategies::SWITCH_MARGIN`]
+//! (1.5) × variance_path × cost_path < variance_bdpt × cost_bdpt, else all strategies (the
+//! margin because the few samples per pixel miss heavy tails: on the dolly the ratio
+//! reached 1.1 where all strategies were better); after [`strategies::PROBE_EVERY`] frames
+//! with the path strategies a pilot frame measures again. The figures are in `run.json` per
+//! frame (`strategy_decision`, beside `reuse_decision`). The comparison is of the frame's
+//! own samples: it assumes a landing in another frame is worth the same share of a fresh
+//! sample with either strategy set, and it leaves the pilot's own work (the re-weighting
+//! and density ratios at a quarter of the pixels) in BDPT's cost. Relative variance weighs
+//! pixels by 1 / (local mean)², a stand-in for FLIP's perceptual error, not FLIP itself.
 //!
 //! **Samples of both kinds.** A frame g may be served by samples with light tracing (all
 //! strategies, static camera) and without it (path strategies), from different generated

@@ -62,9 +62,16 @@ pub fn connect(
 }
 
 /// A strategy's contribution as [`connect_with`] reports it.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Connection {
     pub contribution: Contribution,
+    /// The contribution before its MIS weight, and the weight (`contribution.l` is their
+    /// product).
+    pub unweighted: Rgb,
+    pub weight: f32,
+    /// The vertex sampled for the connection (s = 1: the light point; t = 1: the camera
+    /// point), for evaluating another weight of the same path ([`mis_weight`]).
+    pub sampled: Option<Vertex>,
     /// The light-side endpoint of the connection (light vertex s − 1, or the light point
     /// sampled for s = 1); `None` for s = 0.
     pub light_point: Option<chronolux_core::math::Vec3>,
@@ -86,7 +93,7 @@ pub fn connect_with(
     stats: &mut Stats,
     visible: &mut dyn FnMut(&chronolux_core::geometry::Ray) -> bool,
 ) -> Option<Connection> {
-    if t == 0 || t > camera.len() || s > light.len() {
+    if t == 0 || t > camera.len() || s > light.len().max(usize::from(settings.path_strategies)) {
         return None;
     }
     // A camera subpath ending at infinity only serves s = 0.
@@ -180,6 +187,9 @@ pub fn connect_with(
     };
     Some(Connection {
         contribution: Contribution { l: l * w, raster },
+        unweighted: l,
+        weight: w,
+        sampled,
         light_point,
     })
 }
@@ -246,8 +256,11 @@ pub fn mis_weight(
         };
         ri *= remap(rev) / remap(v.pdf_fwd);
         let delta_i = i != t - 1 && v.delta;
-        // i = 1 is the light-tracing strategy (one camera vertex).
-        if !delta_i && !cv(i - 1).delta && (i > 1 || settings.light_tracing) {
+        // i = 1 is the light-tracing strategy (one camera vertex); this term is strategy
+        // (s + t − i, i), absent from the path strategies when it has a light subpath.
+        let exists = (i > 1 || settings.light_tracing)
+            && (!settings.path_strategies || (i > 1 && s + t - i <= 1));
+        if !delta_i && !cv(i - 1).delta && exists {
             sum += h(ri);
         }
     }
@@ -273,4 +286,94 @@ pub fn mis_weight(
         }
     }
     1.0 / (1.0 + sum)
+}
+
+/// The strategies able to produce the path built by strategy (s, t), as (s′, p_{s′} / p_s):
+/// each strategy's density for this path relative to (s, t)'s own (pbrt-v4's ratio trick,
+/// as in [`mis_weight`], with the same rules for delta vertices, delta lights and light
+/// tracing), (s, t) itself included with ratio 1. Written into `out` (cleared). Used to
+/// estimate, from BDPT's samples, the variance another set of strategies would have
+/// (stbpt's choice between all strategies and the path strategies).
+#[allow(clippy::too_many_arguments)] // reason: mis_weight's arguments and the output
+pub fn strategy_ratios(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    light: &[Vertex],
+    camera: &[Vertex],
+    sampled: Option<&Vertex>,
+    s: usize,
+    t: usize,
+    out: &mut Vec<(usize, f32)>,
+) {
+    out.clear();
+    out.push((s, 1.0));
+    if s + t == 2 {
+        return;
+    }
+    let lv = |i: usize| -> &Vertex {
+        match sampled {
+            Some(v) if s == 1 && i == 0 => v,
+            _ => &light[i],
+        }
+    };
+    let cv = |i: usize| -> &Vertex {
+        match sampled {
+            Some(v) if t == 1 && i == 0 => v,
+            _ => &camera[i],
+        }
+    };
+    let remap = |f: f32| if f != 0.0 { f } else { 1.0 };
+    let pt = cv(t - 1);
+    let qs = (s > 0).then(|| lv(s - 1));
+    let pt_minus = (t > 1).then(|| cv(t - 2));
+    let qs_minus = (s > 1).then(|| lv(s - 2));
+    let pt_rev = match qs {
+        Some(q) => q.pdf(scene, qs_minus, pt),
+        None => pt.pdf_light_origin(scene, pt_minus.expect("s = 0 needs t ≥ 2")),
+    };
+    let pt_minus_rev = pt_minus.map(|pm| match qs {
+        Some(q) => pt.pdf(scene, Some(q), pm),
+        None => pt.pdf_light(scene, pm),
+    });
+    let qs_rev = qs.map(|q| pt.pdf(scene, pt_minus, q));
+    let qs_minus_rev = qs_minus.map(|qm| qs.unwrap().pdf(scene, Some(pt), qm));
+    let mut ri = 1.0f32;
+    for i in (1..t).rev() {
+        let v = cv(i);
+        let rev = if i == t - 1 {
+            pt_rev
+        } else if i + 2 == t {
+            pt_minus_rev.unwrap()
+        } else {
+            v.pdf_rev
+        };
+        ri *= remap(rev) / remap(v.pdf_fwd);
+        let delta_i = i != t - 1 && v.delta;
+        let exists = (i > 1 || settings.light_tracing)
+            && (!settings.path_strategies || (i > 1 && s + t - i <= 1));
+        if !delta_i && !cv(i - 1).delta && exists {
+            out.push((s + t - i, ri));
+        }
+    }
+    ri = 1.0;
+    for i in (0..s).rev() {
+        let v = lv(i);
+        let rev = if i == s - 1 {
+            qs_rev.unwrap()
+        } else if i + 2 == s {
+            qs_minus_rev.unwrap()
+        } else {
+            v.pdf_rev
+        };
+        ri *= remap(rev) / remap(v.pdf_fwd);
+        let delta_i = i != s - 1 && v.delta;
+        let delta_light = if i > 0 {
+            lv(i - 1).delta
+        } else {
+            lv(0).is_delta_light(scene)
+        };
+        if !delta_i && !delta_light {
+            out.push((i, ri));
+        }
+    }
 }

@@ -31,7 +31,7 @@ use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::desc::Projection;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
-pub use connect::{Connection, Contribution, connect, connect_with, mis_weight};
+pub use connect::{Connection, Contribution, connect, connect_with, mis_weight, strategy_ratios};
 pub use vertex::{Vertex, VertexKind};
 
 /// MIS heuristic over the strategies of a path length.
@@ -70,6 +70,14 @@ pub struct BdptSettings {
     /// serves. Default true.
     #[serde(default = "yes")]
     pub light_tracing: bool,
+    /// Only the strategies of unidirectional path tracing: s = 0 (the camera subpath hits
+    /// an emitter) and s = 1 (a light sample at each camera vertex, next-event estimation),
+    /// with MIS over those two only; no light subpath is traced and there is no light
+    /// tracing. The estimator is `path`'s (same walk, same Russian roulette, same power-
+    /// heuristic weights between light and BSDF sampling), written with BDPT's vertices so
+    /// that stbpt can reuse it across frames (its "path mode"). Default false.
+    #[serde(default)]
+    pub path_strategies: bool,
 }
 
 fn yes() -> bool {
@@ -85,6 +93,7 @@ impl Default for BdptSettings {
             seed: 0,
             mis: MisHeuristic::Power,
             light_tracing: true,
+            path_strategies: false,
         }
     }
 }
@@ -96,6 +105,13 @@ impl BdptSettings {
     /// Maximum path length in segments.
     pub fn depth(&self) -> u32 {
         self.max_depth.unwrap_or(DEPTH_CAP).min(DEPTH_CAP)
+    }
+
+    /// Largest number of light vertices s of a strategy with a light subpath of
+    /// `light_len` vertices: 1 (the light sample, no subpath) with
+    /// [`BdptSettings::path_strategies`].
+    pub fn max_light_vertices(&self, light_len: usize) -> usize {
+        if self.path_strategies { 1 } else { light_len }
     }
 }
 
@@ -379,11 +395,15 @@ impl SplattingEstimator for Bdpt {
         PATHS.with_borrow_mut(|(camera, light)| {
             let s = &self.settings;
             generate_camera_subpath(scene, s, raster, sampler, camera, stats);
-            generate_light_subpath(scene, s, sampler, light, stats);
+            if s.path_strategies {
+                light.clear();
+            } else {
+                generate_light_subpath(scene, s, sampler, light, stats);
+            }
             let max_segments = s.depth() as usize;
             let mut l = Rgb::ZERO;
             for t in 1..=camera.len() {
-                for s_ in 0..=light.len() {
+                for s_ in 0..=s.max_light_vertices(light.len()) {
                     // t = 1 is light tracing: never with s = 1, and only when enabled.
                     if (t == 1 && (s_ == 1 || !self.settings.light_tracing))
                         || s_ + t < 2

@@ -18,6 +18,7 @@ use chronolux_render::bdpt::{Bdpt, BdptSettings};
 use chronolux_render::integrator::{Integrator, RenderedFrame};
 use chronolux_render::sequence::{ReuseStats, SequenceRenderer};
 use chronolux_render::temporal::stbpt::adapt::WindowDecision;
+use chronolux_render::temporal::stbpt::strategies::{SWITCH_MARGIN, StrategyDecision};
 use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings};
 
 const W: u32 = 32;
@@ -37,8 +38,7 @@ fn stbpt_frame(
     spp: u32,
     seed: u64,
 ) -> (RenderedFrame, ReuseStats) {
-    let mut src = source(desc, W, H, fps, (0..frames).collect());
-    let mut r = Stbpt::new(StbptSettings {
+    let settings = StbptSettings {
         bdpt: BdptSettings {
             spp,
             seed,
@@ -47,7 +47,20 @@ fn stbpt_frame(
         window: k,
         adaptive: false,
         ..Default::default()
-    });
+    };
+    stbpt_frame_with(desc, fps, frames, out, settings)
+}
+
+/// [`stbpt_frame`] with any settings.
+fn stbpt_frame_with(
+    desc: chronolux_core::scene::desc::SceneDesc,
+    fps: f32,
+    frames: u32,
+    out: u32,
+    settings: StbptSettings,
+) -> (RenderedFrame, ReuseStats) {
+    let mut src = source(desc, W, H, fps, (0..frames).collect());
+    let mut r = Stbpt::new(settings);
     for f in 0..=out {
         let img = r.render_frame(&mut src, f, &|_| {});
         if f == out {
@@ -273,4 +286,205 @@ fn stbpt_chooses_k_from_its_reuse_statistics() {
     // frame-by-frame BDPT.
     let (r3, _) = &reports[3];
     assert_eq!((r3.window, r3.retraced, r3.reused), (1, 0, 0), "{r3:?}");
+}
+
+/// `desc` with its glass and metal made dielectric and no smoother than GGX α = 0.25
+/// (roughness 0.5): no caustics. The path strategies find caustics only by hitting the
+/// lamp through the glass, so their per-run estimates there are heavy-tailed (rare large
+/// values), and the t-test's normal approximation over 12 runs does not hold for them
+/// (checked: on the demo itself block means deviate by ±4–6 % both ways while the image
+/// mean agrees to 0.1 %, t up to 7).
+fn without_caustics(
+    mut desc: chronolux_core::scene::desc::SceneDesc,
+) -> chronolux_core::scene::desc::SceneDesc {
+    for m in &mut desc.materials {
+        m.metallic = 0.0;
+        m.transmission = 0.0;
+        m.roughness = m.roughness.max(0.5);
+    }
+    desc
+}
+
+/// stbpt's frame `out` with window K (fixed), `spp` per frame and the given strategies,
+/// for seeds `seeds`.
+fn stbpt_runs(
+    desc: &chronolux_core::scene::desc::SceneDesc,
+    fps: f32,
+    out: u32,
+    k: u32,
+    spp: u32,
+    path: bool,
+    seeds: std::ops::Range<u64>,
+) -> Vec<RenderedFrame> {
+    seeds
+        .map(|seed| {
+            let settings = StbptSettings {
+                bdpt: BdptSettings {
+                    spp,
+                    seed,
+                    path_strategies: path,
+                    ..Default::default()
+                },
+                window: k,
+                adaptive: false,
+                ..Default::default()
+            };
+            let (img, reuse) = stbpt_frame_with(desc.clone(), fps, out + k + 1, out, settings);
+            assert_eq!(img.invalid_samples, 0);
+            // The path strategies trace no light subpath.
+            assert_eq!(reuse.light_subpaths_per_pixel == 0.0, path, "{reuse:?}");
+            assert!(reuse.reused > 0, "{reuse:?}");
+            img
+        })
+        .collect()
+}
+
+/// The path strategies (`path_strategies`: s ≤ 1 only, MIS over those, no light subpath),
+/// reused across frames through the same validity machinery, are unbiased: the test and
+/// tolerance of [`stbpt_frame_agrees_with_its_own_reference_on_a_moving_animation`],
+/// without caustics ([`without_caustics`]). On the moving demo, frame 0 against its own
+/// BDPT image. Under the moving camera, against stbpt with all strategies (no light
+/// tracing: the camera moves) in the same configuration, 24 runs, as the reference (per
+/// pixel the mean and the variance of the mean): both land the same camera samples (same
+/// camera stream) and so estimate the same landing-density filter of the image, which
+/// differs from the frame's own image near the image border when the camera trucks
+/// (module doc, "Bias"; measured here for all strategies against the BDPT image: +3 to
+/// +7 % on the left column of blocks, t up to 7.2, the same for the path strategies).
+#[test]
+fn stbpt_path_strategies_agree_with_bdpt_on_a_moving_animation() {
+    let (k, spp, runs, fps) = (2u32, 2u32, 12u64, 3.0f32);
+    let out = 0u32;
+    let demo = without_caustics(stage::demo());
+    let reference = bdpt_reference(demo.clone(), fps, out, 256);
+    let imgs = stbpt_runs(&demo, fps, out, k, spp, true, 0..runs);
+    assert_agree(&imgs, &reference, "moving demo, path strategies");
+
+    let dolly = without_caustics(stage::dolly());
+    let all = stbpt_runs(&dolly, fps, out, k, spp, false, 100..124);
+    let n = all.len() as f32;
+    let npx = (W * H) as usize;
+    let mean: Vec<glam::Vec3> = (0..npx)
+        .map(|i| all.iter().map(|r| r.pixels[i]).sum::<glam::Vec3>() / n)
+        .collect();
+    let var_of_mean: Vec<glam::Vec3> = (0..npx)
+        .map(|i| {
+            let m = mean[i];
+            all.iter()
+                .map(|r| (r.pixels[i] - m) * (r.pixels[i] - m))
+                .sum::<glam::Vec3>()
+                / (n - 1.0)
+                / n
+        })
+        .collect();
+    let reference = Estimate::new(W, H, &mean, &var_of_mean);
+    let imgs = stbpt_runs(&dolly, fps, out, k, spp, true, 0..runs);
+    let runs: Vec<&[glam::Vec3]> = imgs.iter().map(|r| r.pixels.as_slice()).collect();
+    block_t_test(&runs, &reference, BLOCK, 0.01)
+        .assert_passes("moving camera, path strategies against all strategies");
+}
+
+/// A frame served by generated frames of both kinds (some with light tracing, some with
+/// the path strategies) agrees with BDPT: the splats are weighted per pixel by the share
+/// of the landings that came from frames with light tracing (module doc, "BDPT or the
+/// path strategies"). Static Cornell box, cap K = 2, starting with the path strategies:
+/// frames 0–3 use them, the fourth asks for a probe, frame 4 is a pilot frame (all
+/// strategies at a quarter of the pixels, the path strategies elsewhere), so frame 2 is
+/// served by frames 0–4 of both kinds and frame 4 by samples of both kinds.
+#[test]
+fn stbpt_frames_of_both_strategy_sets_agree_with_bdpt() {
+    let (k, spp, runs) = (2u32, 2u32, 12u64);
+    let out = 2u32;
+    let reference = bdpt_reference(stage::cornell_box(), 24.0, out, 256);
+    let mut imgs = Vec::new();
+    for seed in 0..runs {
+        let settings = StbptSettings {
+            bdpt: BdptSettings {
+                spp,
+                seed,
+                path_strategies: true,
+                ..Default::default()
+            },
+            window: k,
+            ..Default::default()
+        };
+        let (img, reuse) = stbpt_frame_with(stage::cornell_box(), 24.0, out + k + 1, out, settings);
+        assert_eq!(img.invalid_samples, 0);
+        // Served by 2K + 1 generated frames, some of them (not all) with light subpaths.
+        assert_eq!(reuse.window, 2 * k + 1, "{reuse:?}");
+        let lspp = reuse.light_subpaths_per_pixel;
+        assert!(
+            lspp > 0.0 && lspp < (spp * reuse.window) as f64,
+            "{reuse:?}"
+        );
+        imgs.push(img);
+    }
+    assert_agree(&imgs, &reference, "both strategy sets");
+}
+
+/// Renders frames `0..frames` with stbpt (cap K, `spp` per frame, adaptive) and returns
+/// each frame's choice of strategies (`strategy_decision`).
+fn strategy_reports(
+    desc: chronolux_core::scene::desc::SceneDesc,
+    fps: f32,
+    frames: u32,
+    k: u32,
+    spp: u32,
+) -> Vec<StrategyDecision> {
+    let mut src = source(desc, W, H, fps, (0..frames).collect());
+    let mut r = Stbpt::new(StbptSettings {
+        bdpt: BdptSettings {
+            spp,
+            ..Default::default()
+        },
+        window: k,
+        ..Default::default()
+    });
+    (0..frames)
+        .map(|f| {
+            let img = r.render_frame(&mut src, f, &|_| {});
+            serde_json::from_value(img.report["strategy_decision"].clone())
+                .expect("stbpt reports its choice of strategies")
+        })
+        .collect()
+}
+
+/// The choice of strategies (module doc, "BDPT or the path strategies"), from the
+/// reports. In the Cornell box (diffuse walls, one area light seen by most of the room)
+/// BDPT's light subpaths and connections cost more than they reduce the variance of what
+/// light sampling and BSDF sampling already find: after the first frame stbpt switches to
+/// the path strategies, keeps them and makes a pilot frame (all strategies at a quarter of
+/// the pixels) after every `PROBE_EVERY` frames with them.
+/// With the glass sphere's caustic on the floor (`stage::caustic`, seen directly by a
+/// static camera) light tracing finds the caustic paths that camera paths reach only by
+/// hitting the small light through the glass: stbpt keeps all strategies.
+#[test]
+fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
+    let (k, spp, frames) = (2u32, 4u32, 7u32);
+    let cornell = strategy_reports(stage::cornell_box(), 24.0, frames, k, spp);
+    for (f, d) in cornell.iter().enumerate() {
+        eprintln!("cornell box, frame {f}: {d:?}");
+    }
+    let d0 = &cornell[0];
+    assert_eq!(
+        (d0.strategies.as_str(), d0.next.as_str()),
+        ("bdpt", "path"),
+        "{d0:?}"
+    );
+    assert!(d0.bdpt_over_path.expect("measured with all strategies") > SWITCH_MARGIN);
+    for d in &cornell[1..5] {
+        assert_eq!(d.strategies, "path", "{d:?}");
+        assert!(d.variance_bdpt.is_none() && d.variance_path.is_none());
+    }
+    assert_eq!(cornell[4].decision, "probe");
+    assert_eq!(cornell[5].strategies, "pilot");
+    let caustic = strategy_reports(stage::caustic(), 24.0, 3, k, spp);
+    for (f, d) in caustic.iter().enumerate() {
+        eprintln!("caustic, frame {f}: {d:?}");
+        assert_eq!(
+            (d.strategies.as_str(), d.next.as_str()),
+            ("bdpt", "bdpt"),
+            "{d:?}"
+        );
+        assert!(d.bdpt_over_path.expect("measured") < 1.0);
+    }
 }

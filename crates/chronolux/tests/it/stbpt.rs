@@ -19,6 +19,9 @@ fn stbpt_writes_reuse_statistics_into_run_json() {
         "16x16",
         "--spp",
         "1",
+        // K and the strategies fixed (all of BDPT's): the counts below are exact.
+        "--set",
+        "adaptive=false",
         "--no-preview",
     ]));
     let m = manifest(&dir);
@@ -41,5 +44,7 @@ fn stbpt_writes_reuse_statistics_into_run_json() {
         let factor = reuse["reuse_factor"].as_f64().unwrap();
         assert!(factor > 1.0 && factor <= 3.0 + 1e-9, "frame {f}: {reuse}");
         assert_eq!(reuse["light_subpaths_per_pixel"], window as f64);
+        let strategies = &rec["stats"]["strategy_decision"];
+        assert_eq!(strategies["decision"], "fixed", "frame {f}: {strategies}");
     }
 }

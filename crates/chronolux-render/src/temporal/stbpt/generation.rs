@@ -7,10 +7,12 @@
 
 use super::landing::{Landing, Walk, barycentrics};
 use super::reuse::Regenerated;
+use super::strategies::{self, Mode, Pilot, SHADOW_QUERY_COST, luminance, pilot_pixel};
 use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH, adapt};
 use crate::bdpt::{
-    BdptSettings, Vertex, VertexKind, connect_with, generate_camera_subpath,
-    generate_camera_subpath_with, generate_light_subpath_with, mis_weight,
+    BdptSettings, Connection, MisHeuristic, Vertex, VertexKind, connect_with,
+    generate_camera_subpath, generate_camera_subpath_with, generate_light_subpath_with, mis_weight,
+    strategy_ratios,
 };
 use crate::integrator::{TILE, tile_rect};
 use crate::temporal::window_film::Contribution;
@@ -76,6 +78,11 @@ impl Counts {
 /// Ray queries (closest-hit and shadow) counted in `s`.
 fn queries(s: &Stats) -> u64 {
     s.rays + s.shadow_rays
+}
+
+/// Ray-query cost in closest-hit units ([`SHADOW_QUERY_COST`]).
+fn query_cost(s: &Stats) -> f64 {
+    s.rays as f64 + SHADOW_QUERY_COST * s.shadow_rays as f64
 }
 
 /// Two answers of one ray that give the same vertex.
@@ -196,6 +203,15 @@ pub(super) struct Generation<'a> {
     pub(super) from_f: &'a [FrameDelta],
     /// What differs between window frames `j` and `j + 1` (motion blur only; else empty).
     pub(super) steps: &'a [FrameDelta],
+    /// `bdpt` with only the path strategies (their MIS weights for the pilot).
+    pub(super) path_bdpt: &'a BdptSettings,
+    /// Measure what the path strategies would give (the frame has all strategies and
+    /// chooses the next frame's: module doc, "BDPT or the path strategies").
+    pub(super) pilot: bool,
+    /// Count each landing of this frame in the splat film's weights: the frame has light
+    /// tracing and frames without it may serve the same frames (module doc, "BDPT or the
+    /// path strategies").
+    pub(super) count_lt: bool,
 }
 
 /// A sample landed in window frame `j` at `raster` with `value` (buffered until the
@@ -222,12 +238,75 @@ pub(super) struct TileOut {
     /// Motion blur: per landed sample, its raster offsets to where its point is seen one
     /// frame before / after, and its values there (films `film_blur[0..4]`).
     pub(super) blur: [Vec<Contribution>; 4],
+    /// Pilot (strategy choice): per own sample of f, (pixel, luminance of the camera part
+    /// with the generation's strategies, of the path strategies' estimate).
+    pub(super) pilot: Vec<(u32, f64, f64, f64)>,
+    /// Pilot: the path strategies' second moment estimated from the light-tracing splats
+    /// of f's own samples, (pixel, term) ([`Generation::path_moment`]).
+    pub(super) pilot_splats: Vec<(u32, f64)>,
+    /// Pilot: luminance of f's own contributions from paths the path strategies cannot
+    /// make, and of all of them.
+    pub(super) unreachable: f64,
+    pub(super) reachable: f64,
+    /// Pilot: luminance of f's own contributions by strategy group: s ≤ 1 (t ≥ 2), s ≥ 2
+    /// with t ≥ 2 (connections), t = 1 (light tracing).
+    pub(super) shares: [f64; 3],
+    /// Cost (closest-hit units) of the pilot samples' own-frame work, all of it and the
+    /// path strategies' part, and their number; the same for f's other samples.
+    pub(super) pilot_cost: [f64; 2],
+    pub(super) pilot_n: u64,
+    pub(super) other_cost: f64,
+    pub(super) other_n: u64,
     pub(super) landings: Vec<Landed>,
     pub(super) stats: Vec<Stats>,
     pub(super) counts: Counts,
 }
 
 impl Generation<'_> {
+    /// The path strategies' second moment for the path of connection `c` (strategy (s, t)
+    /// of f), estimated by importance sampling from BDPT's sample (module doc, "BDPT or
+    /// the path strategies"): `Y(c) · Y(c / w) · Σ_A w'² p_u / p_{s'}` (Y: luminance), A the path strategies
+    /// able to make the path (s′ ≤ 1, t′ ≥ 2), w' their weights among themselves. `None`
+    /// when no path strategy can make it.
+    fn path_moment(
+        &self,
+        light: &[Vertex],
+        cam: &[Vertex],
+        c: &Connection,
+        s: usize,
+        t: usize,
+        ratios: &mut Vec<(usize, f32)>,
+    ) -> Option<f64> {
+        let scene_f = &self.scenes[self.jf];
+        strategy_ratios(
+            scene_f,
+            self.bdpt,
+            light,
+            cam,
+            c.sampled.as_ref(),
+            s,
+            t,
+            ratios,
+        );
+        let (mut r2, mut r3, mut r1) = (0.0f64, 0.0f64, 0.0f64);
+        for &(sp, r) in ratios.iter() {
+            if sp <= 1 && s + t - sp >= 2 && r > 0.0 {
+                let r = r as f64;
+                r1 += r;
+                r2 += r * r;
+                r3 += r * r * r;
+            }
+        }
+        let factor = match self.bdpt.mis {
+            // w' = r² / Σ r²: Σ w'² / r = Σ r³ / (Σ r²)².
+            MisHeuristic::Power if r2 > 0.0 => r3 / (r2 * r2),
+            // w' = r / Σ r: Σ w'² / r = 1 / Σ r.
+            MisHeuristic::Balance if r1 > 0.0 => 1.0 / r1,
+            _ => return None,
+        };
+        Some(luminance(c.unweighted) * luminance(c.contribution.l) * factor)
+    }
+
     /// The t = 1 strategies of `light` with at least `s_min` light vertices in frame `j`,
     /// splatted into `out`. With `record` (frame f only), shadow rays are answered for the
     /// whole window and every splat is recorded with its s and the frames it is unoccluded
@@ -259,7 +338,7 @@ impl Generation<'_> {
             let mut vis: FrameMask = 1 << j;
             // Recording: the shadow ray answered for the whole window; otherwise for j.
             let windowed = record.is_some();
-            let c = connect_with(
+            let conn = connect_with(
                 scene,
                 self.bdpt,
                 light,
@@ -279,9 +358,9 @@ impl Generation<'_> {
                         !scene.occluded(r)
                     }
                 },
-            )
-            .map(|c| c.contribution);
-            let Some(c) = c else { continue };
+            );
+            let Some(conn) = conn else { continue };
+            let c = conn.contribution;
             let Some(r) = c.raster else { continue };
             if !c.l.is_finite() {
                 *invalid += 1;
@@ -289,6 +368,16 @@ impl Generation<'_> {
             }
             let (x, y) = (r.x as u32, r.y as u32);
             if r.x >= 0.0 && r.y >= 0.0 && x < w && y < h {
+                if self.pilot && j == self.jf && vis >> j & 1 == 1 {
+                    let mut ratios = Vec::new();
+                    let lum = luminance(c.l);
+                    out.reachable += lum;
+                    out.shares[2] += lum;
+                    match self.path_moment(light, camera, &conn, s, 1, &mut ratios) {
+                        Some(m) => out.pilot_splats.push((y * w + x, m)),
+                        None => out.unreachable += lum,
+                    }
+                }
                 if let Some(rec) = record.as_deref_mut() {
                     rec.push((s, y * w + x, c.l, vis));
                 }
@@ -326,7 +415,11 @@ impl Generation<'_> {
     /// every strategy t ≥ 2 of `cam` and `light` evaluated in f, its shadow ray answered
     /// for the whole window, written into `entries` as `f(x1, wo, wi_k) ⊙ R_k` (R_k: all
     /// but x1's BSDF for f's view). Returns x1's own emission (s = 0, t = 2) with its MIS
-    /// weight, kept apart because it is re-evaluated towards another view.
+    /// weight, kept apart because it is re-evaluated towards another view. Adds to
+    /// `pilot` the path strategies' value in f, their cost and the correction of their
+    /// second moment, and to `reach` the luminance unreachable by them, in all and per
+    /// strategy group (with [`Generation::pilot`]; the value and cost always).
+    #[allow(clippy::too_many_arguments)] // reason: the subpaths, the streams and the pilot's sums
     fn split_at_x1(
         &self,
         light: &[Vertex],
@@ -335,6 +428,8 @@ impl Generation<'_> {
         ns: &PixelSampler,
         entries: &mut Vec<Entry>,
         st: &mut Stats,
+        pilot: &mut (Rgb, f64, f64),
+        out_reach: &mut (f64, f64, [f64; 3]),
     ) -> Option<(Rgb, f32)> {
         let scene_f = &self.scenes[self.jf];
         let all = self.mfa.all_frames();
@@ -342,11 +437,14 @@ impl Generation<'_> {
         entries.clear();
         let mut emission: Option<(Rgb, f32)> = None;
         let mut sampler = ns.clone();
+        let jf = self.jf;
+        let mut ratios = Vec::new();
         for t in 2..=cam.len() {
-            for s in 0..=light.len() {
+            for s in 0..=self.bdpt.max_light_vertices(light.len()) {
                 if s + t - 1 > max_segments {
                     continue;
                 }
+                let before = query_cost(st);
                 let mut vis = all;
                 let c = connect_with(
                     scene_f,
@@ -365,6 +463,48 @@ impl Generation<'_> {
                         vis != 0
                     },
                 );
+                if self.pilot
+                    && let Some(c) = &c
+                    && vis >> jf & 1 == 1
+                {
+                    let lum = luminance(c.contribution.l);
+                    out_reach.1 += lum;
+                    out_reach.2[usize::from(s >= 2)] += lum;
+                    match self.path_moment(light, cam, c, s, t, &mut ratios) {
+                        Some(m) => pilot.2 += m,
+                        None => out_reach.0 += lum,
+                    }
+                }
+                if s <= 1 {
+                    let (value, cost, moment) = (&mut pilot.0, &mut pilot.1, &mut pilot.2);
+                    // The path strategies' part: its queries, and its value in f with
+                    // the path strategies' MIS weights (the same unweighted contribution).
+                    *cost += query_cost(st) - before;
+                    if let Some(c) = &c
+                        && vis >> jf & 1 == 1
+                    {
+                        let w = if self.bdpt.path_strategies || !self.pilot {
+                            c.weight
+                        } else {
+                            mis_weight(
+                                scene_f,
+                                self.path_bdpt,
+                                light,
+                                cam,
+                                c.sampled.as_ref(),
+                                s,
+                                t,
+                            )
+                        };
+                        let cp = c.unweighted * w;
+                        *value += cp;
+                        // Its square: the sampled counterpart of the importance-sampled
+                        // diagonal term above.
+                        if self.pilot {
+                            *moment -= luminance(cp).powi(2);
+                        }
+                    }
+                }
                 let Some(c) = c else { continue };
                 let l = c.contribution.l;
                 let x1v = &cam[1];
@@ -417,6 +557,7 @@ impl Generation<'_> {
         let cs0 = cs.clone();
         let ls0 = ls.clone();
         let st = &mut out.stats[jf];
+        let cost0 = query_cost(st);
         generate_camera_subpath_with(
             scene_f,
             self.bdpt,
@@ -434,22 +575,30 @@ impl Generation<'_> {
                 None,
             ),
         );
-        generate_light_subpath_with(
-            scene_f,
-            self.bdpt,
-            &mut ls,
-            &mut sc.light,
-            st,
-            &mut window_trace(
-                self.mfa,
+        let cam_cost = query_cost(st) - cost0;
+        if self.bdpt.path_strategies {
+            // No light subpath: valid wherever the lights and materials are f's.
+            sc.light.clear();
+            sc.light_masks.clear();
+            sc.light_hits.clear();
+        } else {
+            generate_light_subpath_with(
                 scene_f,
-                jf,
-                &mut sc.wh,
-                &mut sc.light_masks,
-                None,
-                Some(&mut sc.light_hits),
-            ),
-        );
+                self.bdpt,
+                &mut ls,
+                &mut sc.light,
+                st,
+                &mut window_trace(
+                    self.mfa,
+                    scene_f,
+                    jf,
+                    &mut sc.wh,
+                    &mut sc.light_masks,
+                    None,
+                    Some(&mut sc.light_hits),
+                ),
+            );
+        }
         st.samples += 1;
         let (cam, light) = (&sc.cam, &sc.light);
 
@@ -488,13 +637,39 @@ impl Generation<'_> {
         };
 
         // View-independent part at x1 (t ≥ 2), shadow rays answered for the whole window.
-        let emission = self.split_at_x1(light, cam, &sc.cam_rays, &ns, &mut sc.entries, st);
+        let mut pilot = (Rgb::ZERO, cam_cost, 0.0);
+        let mut reach = (0.0, 0.0, [0.0; 3]);
+        let emission = self.split_at_x1(
+            light,
+            cam,
+            &sc.cam_rays,
+            &ns,
+            &mut sc.entries,
+            st,
+            &mut pilot,
+            &mut reach,
+        );
+        out.unreachable += reach.0;
+        out.reachable += reach.1;
+        for (a, b) in out.shares.iter_mut().zip(reach.2) {
+            *a += b;
+        }
 
         // Own frame: the ordinary BDPT sample.
         let mut own = emission.map_or(Rgb::ZERO, |(l, _)| l);
         for e in &sc.entries {
             if e.vis >> jf & 1 == 1 {
                 own += e.c;
+            }
+        }
+        let (path_value, path_cost, path_moment) = pilot;
+        if self.pilot {
+            out.pilot_cost[1] += path_cost;
+            if own.is_finite() && path_value.is_finite() {
+                let (w, h) = (scene_f.camera.width, scene_f.camera.height);
+                let pixel = (raster.y as u32).min(h - 1) * w + (raster.x as u32).min(w - 1);
+                out.pilot
+                    .push((pixel, luminance(own), luminance(path_value), path_moment));
             }
         }
         let mut inv = 0u64;
@@ -510,6 +685,14 @@ impl Generation<'_> {
         let record = (n > 1).then_some(&mut sc.splats);
         self.light_trace(jf, light, cam, &ns, 2, out, &mut inv, record);
         out.counts.invalid[jf] += inv;
+        let own_cost = query_cost(&out.stats[jf]) - cost0;
+        if self.pilot {
+            out.pilot_cost[0] += own_cost;
+            out.pilot_n += 1;
+        } else {
+            out.other_cost += own_cost;
+            out.other_n += 1;
+        }
 
         // Other frames of the window.
         let walk = Walk {
@@ -534,7 +717,9 @@ impl Generation<'_> {
                 .iter()
                 .take_while(|&&m| m >> j & 1 == 1)
                 .count();
-            if !light_ok {
+            if !light_ok && self.bdpt.path_strategies {
+                sc.light_g.clear();
+            } else if !light_ok {
                 // Regenerated from the same stream: the rays of the reproduced prefix are
                 // f's rays with f's hits in g, answered without a traversal.
                 let mut l2 = ls0.clone();
@@ -727,12 +912,22 @@ impl Stbpt {
         }
         self.open_films(scenes[jf].camera.width, scenes[jf].camera.height);
         // A moving camera turns light tracing off for the whole sequence (module doc,
-        // "Bias"): the weights of the kept strategies then sum to one in every frame.
+        // "Bias"): the weights of the kept strategies then sum to one in every frame. The
+        // path strategies have none.
+        let mode = self.mode_next;
+        let light_tracing = self.settings.bdpt.light_tracing && !source.builder().camera_may_move();
         let bdpt = BdptSettings {
-            light_tracing: self.settings.bdpt.light_tracing && !source.builder().camera_may_move(),
+            light_tracing,
+            path_strategies: false,
             ..self.settings.bdpt.clone()
         };
-        let gen_ = Generation {
+        let path_bdpt = BdptSettings {
+            light_tracing: false,
+            path_strategies: true,
+            ..bdpt.clone()
+        };
+        let adaptive = self.settings.adaptive;
+        let gen_all = Generation {
             same_camera,
             bdpt: &bdpt,
             frames: &frames,
@@ -745,7 +940,30 @@ impl Stbpt {
             shutter: self.settings.shutter,
             from_f: &from_f,
             steps: &steps,
+            path_bdpt: &path_bdpt,
+            pilot: adaptive,
+            count_lt: light_tracing && adaptive,
         };
+        // All strategies without the measurements (a frame with all strategies measures
+        // at the pilot pixels only: enough for the comparison, a quarter of its work).
+        let gen_quiet = Generation {
+            pilot: false,
+            ..gen_all
+        };
+        let gen_path = Generation {
+            bdpt: &path_bdpt,
+            pilot: false,
+            count_lt: false,
+            ..gen_all
+        };
+        // Which samples use all strategies, and their share of the frame's samples; which
+        // are measured, and theirs.
+        let all_at = |x: u32, y: u32| match mode {
+            Mode::Bdpt => true,
+            Mode::Path => false,
+            Mode::Pilot => pilot_pixel(x, y),
+        };
+        let measured_at = |x: u32, y: u32| mode != Mode::Path && pilot_pixel(x, y);
         let cam = &scenes[jf].camera;
         let (w, h) = (cam.width, cam.height);
         let film = self.film.as_mut().expect("opened");
@@ -758,6 +976,17 @@ impl Stbpt {
         let spp = self.settings.bdpt.spp;
         let mut counts = Counts::new(n);
         let mut stats = vec![Stats::default(); n];
+        let mut pilot = Pilot::new(w, h);
+        let with_all = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| all_at(x, y))
+            .count();
+        let rho = with_all as f64 / (w as f64 * h as f64).max(1.0);
+        let measured = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| measured_at(x, y))
+            .count();
+        let rho_measured = measured as f64 / (w as f64 * h as f64).max(1.0);
         for (s, first) in
             (0..spp).flat_map(|s| (0..n_tiles).step_by(TILES_PER_BATCH).map(move |t| (s, t)))
         {
@@ -773,11 +1002,27 @@ impl Stbpt {
                     landings: Vec::new(),
                     stats: vec![Stats::default(); n],
                     counts: Counts::new(n),
+                    pilot: Vec::new(),
+                    pilot_splats: Vec::new(),
+                    unreachable: 0.0,
+                    reachable: 0.0,
+                    shares: [0.0; 3],
+                    pilot_cost: [0.0; 2],
+                    pilot_n: 0,
+                    other_cost: 0.0,
+                    other_n: 0,
                 };
                 let mut sc = Scratch::default();
                 for y in y0..y0 + th {
                     for x in x0..x0 + tw {
-                        gen_.sample(x, y, s, &mut sc, &mut out);
+                        let g = if measured_at(x, y) {
+                            &gen_all
+                        } else if all_at(x, y) {
+                            &gen_quiet
+                        } else {
+                            &gen_path
+                        };
+                        g.sample(x, y, s, &mut sc, &mut out);
                     }
                 }
                 let np = (tw * th) as u64;
@@ -795,6 +1040,27 @@ impl Stbpt {
                 for (a, b) in stats.iter_mut().zip(&r.stats) {
                     *a += *b;
                 }
+                for &(pixel, b, p, m) in &r.pilot {
+                    pilot.add_sample(pixel, b, p, m);
+                }
+                for &(pixel, m) in &r.pilot_splats {
+                    pilot.moment[pixel as usize] += m / rho_measured;
+                }
+                pilot.unreachable += r.unreachable;
+                pilot.reachable += r.reachable;
+                for (a, b) in pilot.shares.iter_mut().zip(r.shares) {
+                    *a += b;
+                }
+                pilot.cost_bdpt += r.pilot_cost[0];
+                pilot.cost_path += r.pilot_cost[1];
+                pilot.samples += r.pilot_n;
+                pilot.other_cost += r.other_cost;
+                pilot.other_samples += r.other_n;
+                // Splats come from a share rho of the samples' light subpaths: scaled to
+                // what every sample's would give.
+                for c in r.splats.iter().filter(|c| c.splat && c.frame == f) {
+                    pilot.splat_sq[c.pixel as usize] += luminance(c.value).powi(2) / rho;
+                }
             }
         }
         for (j, &g) in frames.iter().enumerate() {
@@ -806,8 +1072,15 @@ impl Stbpt {
             p.retraced += counts.retraced[j];
             p.invalid += counts.invalid[j];
             p.served_by += 1;
+            if light_tracing {
+                p.served_by_lt += rho;
+            }
+            p.served_by_light += rho;
         }
         let generated = (w as u64 * h as u64 * spp as u64).max(1);
+        let (next, strategy) = strategies::decide(&pilot, spp, mode, adaptive, &mut self.path_run);
+        self.mode_next = next;
+        self.strategy_decisions.insert(f, strategy);
         self.served.insert(
             f,
             counts.landed.iter().sum::<u64>() as f64 / generated as f64,

@@ -159,7 +159,8 @@
 //! generated frame gets the largest K such that every distance up to K paid, one more
 //! when all did (up to the cap). When distance 1 does not pay, K = 0: the samples serve
 //! only their own frame, i.e. the effort is spent as frame-by-frame `bdpt` spends it
-//! (without light tracing when the camera moves, see "Bias"); every [`adapt::PROBE_EVERY`]
+//! (without light tracing when the camera moves, see "Bias"), or as `path` spends it when
+//! the frame uses the path strategies (next section); every [`adapt::PROBE_EVERY`]
 //! such frames one frame is generated at K = 1 to measure again. With motion blur K ≥ 1
 //! (the trajectories need the neighbouring frames). The decision and its
 //! statistics are reported per frame (`reuse_decision` in `run.json`). A frame's
@@ -170,6 +171,87 @@
 //! (dynamic instances are answered per frame, so it grows with K on deforming meshes) is
 //! charged to f's own samples, i.e. counted as BDPT cost; the value of the light-tracing
 //! splats a frame receives from regenerated light subpaths is not counted.
+//!
+//! # BDPT or the path strategies
+//!
+//! **Why BDPT loses to `path` on some scenes.** Measured on the skinned RiggedSimple in the
+//! Cornell stage (64×64, frames 0–7, 8 spp, `--threads 1`; CPU s from `bench quality`,
+//! ray queries from `run.json`; `bench-results/2026-12-02-stbpt2/cost-calibration/`): a
+//! BDPT sample costs 4.2× a `path` sample (3.33 against 0.79 CPU s). Its camera walk and
+//! light samples (s ≤ 1) are `path`'s own work (0.98 M closest-hit, 0.65 M shadow
+//! queries); on top come the light subpaths (+0.92 M closest-hit queries, 94 % of the
+//! camera walks') and +2.55 M connections, about 30 % of them light tracing (t = 1) and the
+//! rest s ≥ 2, t ≥ 2, each with its BSDF evaluations and an MIS weight over the whole path
+//! (fitted: 0.95 µs per connection against 0.25 µs per closest-hit query, see
+//! [`strategies::SHADOW_QUERY_COST`]): the connections are three quarters of BDPT's time
+//! there. What they buy is small: the strategies s ≥ 2 carry about a third of the image's
+//! light (`contribution_shares` in `run.json`: 66 % s ≤ 1, 10 % connections, 24 % light
+//! tracing, much as on the demo), but it is light the path strategies also sample well,
+//! so MIS only moves weight between strategies: measured per sample on the same camera
+//! subpaths (the pilot below), BDPT's relative variance is 0.29–0.33 against 0.5–0.7 for
+//! the path strategies, 1.7–2.2× lower for 4× the cost. The room is diffuse and lit by a
+//! large ceiling light that light sampling finds from almost every camera vertex. Where a
+//! glass sphere focuses the light (the demo, `builtin:caustic`), camera paths find the
+//! caustic only by hitting the lamp through the glass: the path strategies' variance is
+//! 10–90× BDPT's (importance-sampled, below; 1.3–6× as sampled from their own few
+//! samples, which rarely meet those paths) and BDPT wins.
+//!
+//! **The path strategies** ([`BdptSettings::path_strategies`]): the same camera subpath,
+//! only the strategies s = 0 (the walk hits an emitter) and s = 1 (a light sample at each
+//! camera vertex), MIS (power heuristic) over those two only, no light subpath, no light
+//! tracing: `path`'s estimator written with BDPT's vertices, so everything above
+//! (landing, the shading split at x1, validity, partial reuse, re-traces, K) applies
+//! unchanged; with no light subpath, a sample is valid in g wherever its camera segments
+//! are and g's lights and materials are f's. Unbiased for the same reasons as BDPT without
+//! light tracing (its weights sum to one over the strategies it keeps, which all sample
+//! x1 from the camera: also with a moving camera).
+//!
+//! **The decision**, per generated frame, from counts and sample values of the frame's own
+//! samples ([`strategies::decide`]): a sample made with all strategies also evaluates the
+//! value the path strategies give on the same camera subpath and the same light samples (s
+//! ≤ 1 contributions re-weighted by [`crate::bdpt::mis_weight`] among themselves: no ray),
+//! and counts the cost of both parts (closest-hit queries +
+//! [`strategies::SHADOW_QUERY_COST`] per shadow query, fitted to CPU time), at a quarter of
+//! the pixels ([`strategies::pilot_pixel`]: horizontal pairs, spread over the image). The
+//! first generated frame uses all strategies; one after every [`strategies::PROBE_EVERY`]
+//! frames with the path strategies is a **pilot frame**: all strategies and the
+//! measurements at those pixels, the path strategies elsewhere, so measuring again costs a
+//! quarter of a BDPT frame's extra work. (Starting with a pilot frame instead cost the demo
+//! up to 30 % at equal FLIP: its path samples spread caustic fireflies over the window.)
+//! Variances are of the luminance, relative (per pixel divided by the local mean², floored
+//! at 0.1 of the frame mean), per sample; BDPT's includes its light-tracing splats (Σ c² /
+//! spp per pixel). The path strategies' variance from their own few samples would miss
+//! exactly what makes them lose: rare high-valued paths (caustics seen through a diffuse
+//! surface), which 1–4 samples per pixel seldom meet. So their **diagonal** second moment
+//! (Σ over strategies of w'² f² / p_{s'}) is importance-sampled from every BDPT
+//! contribution (light tracing included), with the density ratios p_{s'} / p_u of the BDPT
+//! path ([`crate::bdpt::strategy_ratios`]), replacing the sampled diagonal terms; the cross
+//! terms between path lengths of one camera walk stay as sampled. BDPT's contributions from
+//! paths no path strategy can make (delta lights behind specular surfaces) count as
+//! `unreachable_share`: above [`strategies::UNREACHABLE_MAX`], BDPT is kept whatever the
+//! variances. The next frame uses the path strategies iff [`strategies::SWITCH_MARGIN`]
+//! (1.5) × variance_path × cost_path < variance_bdpt × cost_bdpt, else all strategies (the
+//! margin because the few samples per pixel miss heavy tails: on the dolly the ratio
+//! reached 1.1 where all strategies were better); after [`strategies::PROBE_EVERY`] frames
+//! with the path strategies a pilot frame measures again. The figures are in `run.json` per
+//! frame (`strategy_decision`, beside `reuse_decision`). The comparison is of the frame's
+//! own samples: it assumes a landing in another frame is worth the same share of a fresh
+//! sample with either strategy set, and it leaves the pilot's own work (the re-weighting
+//! and density ratios at a quarter of the pixels) in BDPT's cost. Relative variance weighs
+//! pixels by 1 / (local mean)², a stand-in for FLIP's perceptual error, not FLIP itself.
+//!
+//! **Samples of both kinds.** A frame g may be served by samples with light tracing (all
+//! strategies, static camera) and without it (path strategies), from different generated
+//! frames or within a pilot frame: the first estimate the radiance minus its
+//! light-tracing share at their landings, the others all of it. Each landing of a sample
+//! with light tracing is counted per pixel (in the splat film's weights); the splats,
+//! normalised by the light subpaths that made them (spp × the summed share ρ of samples
+//! with light tracing of the serving frames), are weighted per pixel by the share
+//! n_lt / n of the landings there that had light tracing, so the pixel's expectation is
+//! (n_lt (μ − μ_lt) + (n − n_lt) μ) / n + (n_lt / n) μ_lt = μ (test
+//! `stbpt_frames_of_both_strategy_sets_agree_with_bdpt`).
+//!
+//! [`BdptSettings::path_strategies`]: crate::bdpt::BdptSettings::path_strategies
 //!
 //! # Memory
 //!
@@ -206,6 +288,7 @@ mod generation;
 mod landing;
 mod motion;
 mod reuse;
+pub mod strategies;
 
 /// Settings of [`Stbpt`].
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
@@ -217,8 +300,10 @@ pub struct StbptSettings {
     /// frame); with `adaptive`, each generated frame's K is chosen in 0..=window from the
     /// reuse statistics (module doc, "Choosing K"). Default 4. At most 31.
     pub window: u32,
-    /// Choose K per generated frame from the reuse statistics (true), or always use
-    /// `window` (false). Default true.
+    /// Choose K per generated frame from the reuse statistics, and BDPT's strategies or
+    /// the path strategies from the pilot (true: module doc, "Choosing K" and "BDPT or
+    /// the path strategies"); or always use `window` and the strategies of `bdpt` (false).
+    /// Default true.
     #[serde(default = "adaptive_default")]
     pub adaptive: bool,
     /// Motion blur: fraction of the frame interval the shutter is open, centred on the
@@ -282,8 +367,13 @@ struct Pending {
     partial: u64,
     retraced: u64,
     invalid: u64,
-    /// Generated frames whose samples served this frame (light subpaths: `spp` each).
+    /// Generated frames whose samples served this frame.
     served_by: u32,
+    /// Of those, the share of samples generated with light tracing (their splats: `spp`
+    /// light subpaths per pixel for a whole frame) / with light subpaths (all BDPT
+    /// strategies), summed over the generated frames (a pilot frame counts its share).
+    served_by_lt: f64,
+    served_by_light: f64,
 }
 
 /// Spatio-temporal BDPT; see the module documentation.
@@ -310,6 +400,12 @@ pub struct Stbpt {
     zero_run: u32,
     /// The self-assessment of each generated frame, until the frame is output.
     decisions: BTreeMap<u32, adapt::WindowDecision>,
+    /// How the next generated frame is made (module doc, "BDPT or the path strategies").
+    mode_next: strategies::Mode,
+    /// Consecutive generated frames with the path strategies ([`strategies::decide`]).
+    path_run: u32,
+    /// The choice of strategies of each generated frame, until the frame is output.
+    strategy_decisions: BTreeMap<u32, strategies::StrategyDecision>,
 }
 
 impl Stbpt {
@@ -319,6 +415,16 @@ impl Stbpt {
             k_next,
             zero_run: 0,
             decisions: BTreeMap::new(),
+            // All strategies first (measuring at the pilot pixels): a pilot frame's path
+            // samples would spread caustic fireflies over its window where BDPT wins
+            // (measured on the demo: 0.70–0.94× the CPU efficiency at FLIP ≤ 0.11).
+            mode_next: if settings.bdpt.path_strategies {
+                strategies::Mode::Path
+            } else {
+                strategies::Mode::Bdpt
+            },
+            path_run: 0,
+            strategy_decisions: BTreeMap::new(),
             settings,
             film: None,
             film_sq: None,
@@ -409,15 +515,32 @@ impl SequenceRenderer for Stbpt {
         let spp = self.settings.bdpt.spp;
         let scene = source.frame(frame);
         let (w, h) = (scene.camera.width, scene.camera.height);
-        let splat_scale = 1.0 / (spp as f32 * window as f32);
         self.open_films(w, h);
         let (mut means, weights) = self.film.as_mut().expect("opened").finish(frame, 0.0);
         let (squares, _) = self.film_sq.as_mut().expect("opened").finish(frame, 0.0);
-        let (splats, _) = self
+        // The splats are the light-tracing share of the frames with light tracing: mean
+        // over their light subpaths, weighted per pixel by their landings' share (module
+        // doc, "BDPT or the path strategies"); all of the pixel when every frame had it.
+        let lt = p.served_by_lt;
+        let splat_scale = if lt > 0.0 {
+            (1.0 / (spp as f64 * lt)) as f32
+        } else {
+            0.0
+        };
+        let (mut splats, lt_landed) = self
             .film_splat
             .as_mut()
             .expect("opened")
             .finish(frame, splat_scale);
+        if lt > 0.0 && lt != window as f64 {
+            for ((s, &nb), &n) in splats.iter_mut().zip(&lt_landed).zip(&weights) {
+                *s *= if n > 0.0 {
+                    nb / n
+                } else {
+                    (lt / window as f64) as f32
+                };
+            }
+        }
         if self.settings.shutter > 0.0 {
             let blur: Vec<Vec<Rgb>> = self
                 .film_blur
@@ -449,7 +572,7 @@ impl SequenceRenderer for Stbpt {
             reused_partially: p.partial,
             retraced: p.retraced,
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
-            light_subpaths_per_pixel: spp as f64 * window as f64,
+            light_subpaths_per_pixel: spp as f64 * p.served_by_light,
             film: self.film_stats(),
         };
         self.served.retain(|&f, _| f + k >= frame);
@@ -466,6 +589,13 @@ impl SequenceRenderer for Stbpt {
             );
         }
         self.decisions.retain(|&f, _| f > frame);
+        if let Some(d) = self.strategy_decisions.remove(&frame) {
+            report.insert(
+                "strategy_decision".to_string(),
+                serde_json::to_value(d).expect("serialisable"),
+            );
+        }
+        self.strategy_decisions.retain(|&f, _| f > frame);
         RenderedFrame {
             width: w,
             height: h,

@@ -81,6 +81,17 @@ impl Generation<'_> {
                 weight: 1.0,
                 splat: false,
             });
+            if self.count_lt {
+                // The splat film's weights count the landings of frames with light
+                // tracing (module doc, "BDPT or the path strategies").
+                out.splats.push(Contribution {
+                    frame,
+                    pixel,
+                    value: Rgb::ZERO,
+                    weight: 1.0,
+                    splat: false,
+                });
+            }
             if shutter <= 0.0 {
                 continue;
             }

@@ -147,7 +147,7 @@ impl Generation<'_> {
         let mut sampler = conn.clone();
         let mut l = Rgb::ZERO;
         for t in 2..=camera.len() {
-            for s in 0..=light.len() {
+            for s in 0..=self.bdpt.max_light_vertices(light.len()) {
                 if s + t - 1 > max_segments {
                     continue;
                 }

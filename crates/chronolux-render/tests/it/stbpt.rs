@@ -477,7 +477,9 @@ fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
     }
     assert_eq!(cornell[4].decision, "probe");
     assert_eq!(cornell[5].strategies, "pilot");
-    let caustic = strategy_reports(stage::caustic(), 24.0, 3, k, spp);
+    // All strategies throughout; measured in frame 0, then `PROBE_EVERY` frames without
+    // measurements, then measured again (frame 5), still choosing BDPT.
+    let caustic = strategy_reports(stage::caustic(), 24.0, 6, k, spp);
     for (f, d) in caustic.iter().enumerate() {
         eprintln!("caustic, frame {f}: {d:?}");
         assert_eq!(
@@ -485,6 +487,14 @@ fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
             ("bdpt", "bdpt"),
             "{d:?}"
         );
-        assert!(d.bdpt_over_path.expect("measured") < 1.0);
+        if f == 0 || f == 5 {
+            assert!(d.bdpt_over_path.expect("measured") < 1.0, "{d:?}");
+        } else {
+            assert!(
+                d.bdpt_over_path.is_none() && d.variance_bdpt.is_none(),
+                "{d:?}"
+            );
+            assert_eq!(d.decision, if f == 4 { "probe" } else { "bdpt" }, "{d:?}");
+        }
     }
 }

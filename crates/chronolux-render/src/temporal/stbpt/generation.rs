@@ -959,11 +959,12 @@ impl Stbpt {
         // Which samples use all strategies, and their share of the frame's samples; which
         // are measured, and theirs.
         let all_at = |x: u32, y: u32| match mode {
-            Mode::Bdpt => true,
+            Mode::Bdpt | Mode::BdptQuiet => true,
             Mode::Path => false,
             Mode::Pilot => pilot_pixel(x, y),
         };
-        let measured_at = |x: u32, y: u32| mode != Mode::Path && pilot_pixel(x, y);
+        let measured_at =
+            |x: u32, y: u32| matches!(mode, Mode::Bdpt | Mode::Pilot) && pilot_pixel(x, y);
         let cam = &scenes[jf].camera;
         let (w, h) = (cam.width, cam.height);
         let film = self.film.as_mut().expect("opened");

@@ -23,7 +23,9 @@ use chronolux_core::color::Rgb;
 pub const SHADOW_QUERY_COST: f64 = 3.9;
 
 /// Generated frames with the path strategies after which one pilot frame is generated to
-/// measure both again (the comparison needs the light subpaths).
+/// measure both again (the comparison needs the light subpaths); likewise, generated
+/// frames with all strategies but no measurements after which one measures again (the
+/// measurements cost 6–26 % of a frame on the demo, where BDPT stays the choice).
 pub const PROBE_EVERY: u32 = 4;
 
 /// In a pilot frame, one pixel pair in `PILOT_EVERY` uses all strategies ([`pilot_pixel`]).
@@ -39,12 +41,15 @@ pub enum Mode {
     /// All strategies (and the measurements) at the [`pilot_pixel`]s, the path
     /// strategies elsewhere: what the comparison needs at a quarter of its cost.
     Pilot,
+    /// All strategies, every sample, no measurements: the frames after one that measured
+    /// and chose BDPT, until the next measuring frame (`PROBE_EVERY`).
+    BdptQuiet,
 }
 
 impl Mode {
     fn name(self) -> String {
         match self {
-            Mode::Bdpt => "bdpt",
+            Mode::Bdpt | Mode::BdptQuiet => "bdpt",
             Mode::Path => "path",
             Mode::Pilot => "pilot",
         }
@@ -262,7 +267,8 @@ pub struct StrategyDecision {
     pub contribution_shares: Option<[f64; 3]>,
     /// Cost per sample in closest-hit ray queries (shadow queries count
     /// `SHADOW_QUERY_COST`) of the frame's own samples: all strategies (measured only on
-    /// frames generated with them) / the path strategies' part.
+    /// frames generated with them) / the path strategies' part (0 in a frame with all
+    /// strategies and no measurements, whose own cost is `cost_bdpt` then).
     pub cost_bdpt: Option<f64>,
     pub cost_path: f64,
     /// (variance × cost) of BDPT over that of the path strategies: above 1, the path
@@ -277,8 +283,9 @@ pub struct StrategyDecision {
 /// Rule: after a frame with measurements (all strategies or pilot), the next uses the path
 /// strategies iff `SWITCH_MARGIN` × variance_path × cost_path < variance_bdpt × cost_bdpt
 /// and the share of light they cannot reach is at most `UNREACHABLE_MAX`, else all
-/// strategies. After a frame with the path strategies nothing can be compared:
-/// they are kept, and after `PROBE_EVERY` such frames a pilot frame measures again.
+/// strategies without measurements. After a frame without measurements nothing can be
+/// compared: its strategies are kept, and after `PROBE_EVERY` such frames a pilot frame
+/// (path) or a measuring frame with all strategies (BDPT) measures again.
 pub fn decide(
     pilot: &Pilot,
     spp: u32,
@@ -287,9 +294,11 @@ pub fn decide(
     path_run: &mut u32,
 ) -> (Mode, StrategyDecision) {
     let (vb, vp, vs) = pilot.variances(spp);
-    let measured = mode != Mode::Path && pilot.samples > 0;
+    let measured = matches!(mode, Mode::Bdpt | Mode::Pilot) && pilot.samples > 0;
     let cost_path = if measured {
         pilot.cost_path / pilot.samples as f64
+    } else if mode == Mode::BdptQuiet {
+        0.0
     } else {
         pilot.other_cost / pilot.other_samples.max(1) as f64
     };
@@ -302,6 +311,9 @@ pub fn decide(
         ..Default::default()
     };
     let unreachable = pilot.unreachable / pilot.reachable.max(f64::MIN_POSITIVE);
+    if mode == Mode::BdptQuiet {
+        d.cost_bdpt = Some(pilot.other_cost / pilot.other_samples.max(1) as f64);
+    }
     if measured {
         d.unreachable_share = Some(unreachable);
         let total: f64 = pilot.shares.iter().sum();
@@ -312,6 +324,14 @@ pub fn decide(
     }
     let (next, why) = if !adaptive {
         (mode, "fixed")
+    } else if mode == Mode::BdptQuiet {
+        // All strategies without measurements: kept until the next measuring frame.
+        *path_run += 1;
+        if *path_run >= PROBE_EVERY {
+            (Mode::Bdpt, "probe")
+        } else {
+            (Mode::BdptQuiet, "bdpt")
+        }
     } else if !measured {
         *path_run += 1;
         if *path_run >= PROBE_EVERY {
@@ -322,9 +342,10 @@ pub fn decide(
     } else if unreachable <= UNREACHABLE_MAX && SWITCH_MARGIN * vp * cost_path < vb * cost_bdpt {
         (Mode::Path, "path")
     } else {
-        (Mode::Bdpt, "bdpt")
+        (Mode::BdptQuiet, "bdpt")
     };
-    if next != Mode::Path {
+    // `path_run` counts the consecutive frames without measurements (path or quiet BDPT).
+    if matches!(next, Mode::Bdpt | Mode::Pilot) {
         *path_run = 0;
     }
     d.next = next.name();

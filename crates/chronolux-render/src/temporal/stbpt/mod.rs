@@ -233,7 +233,10 @@
 //! (1.5) × variance_path × cost_path < variance_bdpt × cost_bdpt, else all strategies (the
 //! margin because the few samples per pixel miss heavy tails: on the dolly the ratio
 //! reached 1.1 where all strategies were better); after [`strategies::PROBE_EVERY`] frames
-//! with the path strategies a pilot frame measures again. The figures are in `run.json` per
+//! with the path strategies a pilot frame measures again, and after as many frames with
+//! all strategies and no measurements (the frames after a measuring frame that kept
+//! them: measuring cost 6–26 % of each such frame on the demo) a frame with all
+//! strategies measures again. The figures are in `run.json` per
 //! frame (`strategy_decision`, beside `reuse_decision`). The comparison is of the frame's
 //! own samples: it assumes a landing in another frame is worth the same share of a fresh
 //! sample with either strategy set, and it leaves the pilot's own work (the re-weighting

@@ -210,81 +210,14 @@ pub fn mis_weight(
     if s + t == 2 {
         return 1.0;
     }
-    let lv = |i: usize| -> &Vertex {
-        match sampled {
-            Some(v) if s == 1 && i == 0 => v,
-            _ => &light[i],
-        }
-    };
-    let cv = |i: usize| -> &Vertex {
-        match sampled {
-            Some(v) if t == 1 && i == 0 => v,
-            _ => &camera[i],
-        }
-    };
     let h = |r: f32| match settings.mis {
         MisHeuristic::Balance => r,
         MisHeuristic::Power => r * r,
     };
-    let remap = |f: f32| if f != 0.0 { f } else { 1.0 };
-    let pt = cv(t - 1);
-    let qs = (s > 0).then(|| lv(s - 1));
-    let pt_minus = (t > 1).then(|| cv(t - 2));
-    let qs_minus = (s > 1).then(|| lv(s - 2));
-    // Reverse densities of the four vertices next to the connection.
-    let pt_rev = match qs {
-        Some(q) => q.pdf(scene, qs_minus, pt),
-        None => pt.pdf_light_origin(scene, pt_minus.expect("s = 0 needs t ≥ 2")),
-    };
-    let pt_minus_rev = pt_minus.map(|pm| match qs {
-        Some(q) => pt.pdf(scene, Some(q), pm),
-        None => pt.pdf_light(scene, pm),
-    });
-    let qs_rev = qs.map(|q| pt.pdf(scene, pt_minus, q));
-    let qs_minus_rev = qs_minus.map(|qm| qs.unwrap().pdf(scene, Some(pt), qm));
-
     let mut sum = 0.0f32;
-    let mut ri = 1.0f32;
-    for i in (1..t).rev() {
-        let v = cv(i);
-        let rev = if i == t - 1 {
-            pt_rev
-        } else if i + 2 == t {
-            pt_minus_rev.unwrap()
-        } else {
-            v.pdf_rev
-        };
-        ri *= remap(rev) / remap(v.pdf_fwd);
-        let delta_i = i != t - 1 && v.delta;
-        // i = 1 is the light-tracing strategy (one camera vertex); this term is strategy
-        // (s + t − i, i), absent from the path strategies when it has a light subpath.
-        let exists = (i > 1 || settings.light_tracing)
-            && (!settings.path_strategies || (i > 1 && s + t - i <= 1));
-        if !delta_i && !cv(i - 1).delta && exists {
-            sum += h(ri);
-        }
-    }
-    ri = 1.0;
-    for i in (0..s).rev() {
-        let v = lv(i);
-        let rev = if i == s - 1 {
-            qs_rev.unwrap()
-        } else if i + 2 == s {
-            qs_minus_rev.unwrap()
-        } else {
-            v.pdf_rev
-        };
-        ri *= remap(rev) / remap(v.pdf_fwd);
-        let delta_i = i != s - 1 && v.delta;
-        let delta_light = if i > 0 {
-            lv(i - 1).delta
-        } else {
-            lv(0).is_delta_light(scene)
-        };
-        if !delta_i && !delta_light {
-            sum += h(ri);
-        }
-    }
+    other_strategies(scene, settings, light, camera, sampled, s, t, |_, r| {
+        sum += h(r)
+    });
     1.0 / (1.0 + sum)
 }
 
@@ -310,6 +243,28 @@ pub fn strategy_ratios(
     if s + t == 2 {
         return;
     }
+    other_strategies(scene, settings, light, camera, sampled, s, t, |s2, r| {
+        out.push((s2, r))
+    });
+}
+
+/// The ratio walk shared by [`mis_weight`] and [`strategy_ratios`]: calls `visit(s′,
+/// p_{s′} / p_s)` for every strategy other than (s, t) that can make the path (s, t)
+/// built, camera side first (s′ = s + t − i for camera vertex i), then the light side
+/// (s′ = i), skipping connections through delta vertices, delta lights, light tracing
+/// when it is off and, with `path_strategies`, every strategy beyond s′ ≤ 1. Needs
+/// s + t > 2.
+#[allow(clippy::too_many_arguments)] // reason: mis_weight's arguments and the visitor
+fn other_strategies(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    light: &[Vertex],
+    camera: &[Vertex],
+    sampled: Option<&Vertex>,
+    s: usize,
+    t: usize,
+    mut visit: impl FnMut(usize, f32),
+) {
     let lv = |i: usize| -> &Vertex {
         match sampled {
             Some(v) if s == 1 && i == 0 => v,
@@ -327,6 +282,7 @@ pub fn strategy_ratios(
     let qs = (s > 0).then(|| lv(s - 1));
     let pt_minus = (t > 1).then(|| cv(t - 2));
     let qs_minus = (s > 1).then(|| lv(s - 2));
+    // Reverse densities of the four vertices next to the connection.
     let pt_rev = match qs {
         Some(q) => q.pdf(scene, qs_minus, pt),
         None => pt.pdf_light_origin(scene, pt_minus.expect("s = 0 needs t ≥ 2")),
@@ -337,6 +293,7 @@ pub fn strategy_ratios(
     });
     let qs_rev = qs.map(|q| pt.pdf(scene, pt_minus, q));
     let qs_minus_rev = qs_minus.map(|qm| qs.unwrap().pdf(scene, Some(pt), qm));
+
     let mut ri = 1.0f32;
     for i in (1..t).rev() {
         let v = cv(i);
@@ -349,10 +306,12 @@ pub fn strategy_ratios(
         };
         ri *= remap(rev) / remap(v.pdf_fwd);
         let delta_i = i != t - 1 && v.delta;
+        // i = 1 is the light-tracing strategy (one camera vertex); this term is strategy
+        // (s + t − i, i), absent from the path strategies when it has a light subpath.
         let exists = (i > 1 || settings.light_tracing)
             && (!settings.path_strategies || (i > 1 && s + t - i <= 1));
         if !delta_i && !cv(i - 1).delta && exists {
-            out.push((s + t - i, ri));
+            visit(s + t - i, ri);
         }
     }
     ri = 1.0;
@@ -373,7 +332,7 @@ pub fn strategy_ratios(
             lv(0).is_delta_light(scene)
         };
         if !delta_i && !delta_light {
-            out.push((i, ri));
+            visit(i, ri);
         }
     }
 }

@@ -208,15 +208,15 @@ fn stbpt_bit_identical_across_thread_counts() {
     assert_eq!(ra, rb);
 }
 
-/// Renders frames `0..frames` with stbpt (cap K, `spp` per frame) and returns each frame's
-/// reuse statistics and self-assessment (`reuse_decision`).
-fn stbpt_reports(
+/// Renders frames `0..frames` with stbpt (cap K, `spp` per frame, its defaults otherwise:
+/// adaptive) and returns each frame's report.
+fn stbpt_frame_reports(
     desc: chronolux_core::scene::desc::SceneDesc,
     fps: f32,
     frames: u32,
     k: u32,
     spp: u32,
-) -> Vec<(ReuseStats, WindowDecision)> {
+) -> Vec<RenderedFrame> {
     let mut src = source(desc, W, H, fps, (0..frames).collect());
     let mut r = Stbpt::new(StbptSettings {
         bdpt: BdptSettings {
@@ -227,8 +227,22 @@ fn stbpt_reports(
         ..Default::default()
     });
     (0..frames)
-        .map(|f| {
-            let img = r.render_frame(&mut src, f, &|_| {});
+        .map(|f| r.render_frame(&mut src, f, &|_| {}))
+        .collect()
+}
+
+/// Renders frames `0..frames` with stbpt (cap K, `spp` per frame) and returns each frame's
+/// reuse statistics and self-assessment (`reuse_decision`).
+fn stbpt_reports(
+    desc: chronolux_core::scene::desc::SceneDesc,
+    fps: f32,
+    frames: u32,
+    k: u32,
+    spp: u32,
+) -> Vec<(ReuseStats, WindowDecision)> {
+    stbpt_frame_reports(desc, fps, frames, k, spp)
+        .into_iter()
+        .map(|img| {
             assert_eq!(img.invalid_samples, 0);
             let reuse = serde_json::from_value(img.report["reuse"].clone()).expect("reuse");
             let d = serde_json::from_value(img.report["reuse_decision"].clone())
@@ -430,18 +444,9 @@ fn strategy_reports(
     k: u32,
     spp: u32,
 ) -> Vec<StrategyDecision> {
-    let mut src = source(desc, W, H, fps, (0..frames).collect());
-    let mut r = Stbpt::new(StbptSettings {
-        bdpt: BdptSettings {
-            spp,
-            ..Default::default()
-        },
-        window: k,
-        ..Default::default()
-    });
-    (0..frames)
-        .map(|f| {
-            let img = r.render_frame(&mut src, f, &|_| {});
+    stbpt_frame_reports(desc, fps, frames, k, spp)
+        .into_iter()
+        .map(|img| {
             serde_json::from_value(img.report["strategy_decision"].clone())
                 .expect("stbpt reports its choice of strategies")
         })

@@ -2,8 +2,14 @@
 //!
 //! ## Elements
 //! Every triangle of every geometry is split uniformly into `k²` sub-triangles
-//! ("elements"), `k = clamp(⌈longest world edge / element size⌉, 1, MAX_K)`, where the
-//! element size is the scene's bounding-box diagonal divided by a target count. An element
+//! ("elements"), `k = clamp(⌈ℓ / element size⌉, 1, MAX_K)`, where the element size `h` is
+//! the scene's bounding-box diagonal divided by a target count and `ℓ` is the triangle's
+//! *subdivision length* ([`subdivision_length`]): its longest edge `L` for a well-shaped
+//! triangle, less for a sliver. With `ℓ = L`, a sliver (longest edge over altitude 48 on
+//! RiggedSimple's cylinder) got elements 24× smaller in area than a well-shaped
+//! triangle's, so the reconstruction's rows (elements within a few `h`) grew to hundreds
+//! or thousands of entries: 5.4× the mean row length of the Cornell scenes. An element
+//! is addressed by (geometry, triangle, barycentrics), never by a world position, so:
 //! is addressed by (geometry, triangle, barycentrics), never by a world position, so:
 //! - element ids are stable across frames (geometry ids are; the mesh is built once from
 //!   the first frame and reused while the topology matches, [`ElementMesh::matches`]);
@@ -32,6 +38,28 @@ use std::collections::HashMap;
 
 /// Largest subdivision of one triangle (k² = 4096 elements).
 pub const MAX_K: u32 = 64;
+
+/// The length a triangle's subdivision is measured by: `min(L, max(2√2·√A, L/4))` for
+/// longest edge `L` and area `A`.
+///
+/// - Every triangle with `L²/(2A)` (longest edge over its altitude) ≤ 4 has `2√2·√A ≥ L`
+///   and keeps `ℓ = L`: right isosceles and equilateral triangles, and the halves of
+///   rectangles up to aspect 3.7 (`4ab ≥ a² + b²`), so the Cornell stage's walls and
+///   boxes are split exactly as before.
+/// - A thinner triangle is split by `2√2·√A`: its elements' area is then at least
+///   `h²/8`, half that of a right isosceles triangle's elements (`h²/4`), instead of
+///   shrinking with the aspect ratio; they are longer than `h` along the long edge (about
+///   3.5 h at RiggedSimple's aspect 48).
+/// - The floor `L/4` keeps an extreme sliver's elements no longer than `4h`, i.e. within
+///   the reconstruction's support of a few `h`.
+pub fn subdivision_length(p: [Vec3; 3]) -> f32 {
+    let longest = (p[1] - p[0])
+        .length()
+        .max((p[2] - p[1]).length())
+        .max((p[0] - p[2]).length());
+    let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length();
+    longest.min((8.0 * area).sqrt().max(0.25 * longest))
+}
 
 /// World transform of every geometry's vertex data (identity for world-space data), from
 /// the instance that carries it ([`FrameScene::geometry_instance`]).
@@ -171,11 +199,7 @@ impl ElementMesh {
             let mut edge: HashMap<(u32, u32, u32, u32), u32> = HashMap::new();
             for tri in g.indices.iter() {
                 let p = tri.map(|i| xf[gid].transform_point3(g.positions[i as usize]));
-                let longest = (p[1] - p[0])
-                    .length()
-                    .max((p[2] - p[1]).length())
-                    .max((p[0] - p[2]).length());
-                let k = ((longest / h).ceil() as u32).clamp(1, MAX_K);
+                let k = ((subdivision_length(p) / h).ceil() as u32).clamp(1, MAX_K);
                 let t = m.tri_k.len() as u32;
                 m.tri_k.push(k);
                 let mut next = m.n_vertices;
@@ -515,6 +539,44 @@ impl FrameElements {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Well-shaped triangles keep their longest edge as the subdivision length (so their
+    /// elements are unchanged); a sliver's elements get area h²/8 (k = ℓ/h before the
+    /// ceiling), and an extreme one is held to elements ≤ 4 h long.
+    #[test]
+    fn subdivision_length_keeps_well_shaped_triangles_and_bounds_slivers() {
+        let tri = |b: f32, c: f32| [Vec3::ZERO, Vec3::new(b, 0.0, 0.0), Vec3::new(0.0, c, 0.0)];
+        for (b, c) in [(1.0f32, 1.0f32), (3.7, 1.0), (1.0, 3.7), (0.2, 0.5)] {
+            let l = (b * b + c * c).sqrt();
+            assert!(
+                (subdivision_length(tri(b, c)) - l).abs() <= 1e-6 * l,
+                "{b}×{c}"
+            );
+        }
+        let eq = [Vec3::ZERO, Vec3::X, Vec3::new(0.5, 0.75f32.sqrt(), 0.0)];
+        assert!((subdivision_length(eq) - 1.0).abs() < 1e-6);
+        // Longest edge over altitude 48 (RiggedSimple): A = L²/96.
+        let sliver = [
+            Vec3::ZERO,
+            Vec3::new(48.0, 0.0, 0.0),
+            Vec3::new(24.0, 1.0, 0.0),
+        ];
+        let (ell, area, h) = (subdivision_length(sliver), 24.0f32, 1.0f32);
+        let k = ell / h;
+        assert!(
+            (area / (k * k) - h * h / 8.0).abs() < 1e-4,
+            "element area {}",
+            area / (k * k)
+        );
+        assert!(48.0 / k < 4.0 * h);
+        // Aspect 4096: the L/4 floor.
+        let needle = [
+            Vec3::ZERO,
+            Vec3::new(64.0, 0.0, 0.0),
+            Vec3::new(32.0, 1.0 / 64.0, 0.0),
+        ];
+        assert_eq!(subdivision_length(needle), 16.0);
+    }
 
     #[test]
     fn grid_and_cell_indices_are_dense() {

@@ -10,3 +10,4 @@ for b in sliver 7b7288c; do
     --frames 0..8 --target-flip 0.2,0.15,0.12,0.1,0.09 --start-effort 2 --max-effort 128 --threads 1 --json --report $b.md > $b.json 2> $b.log
   uptime >> $b.uptime
 done
+# Ratios: python3 ../2026-12-02-stdept2/equal_flip.py {sliver,7b7288c,cm-sliver,cm-7b7288c}.json

@@ -108,8 +108,14 @@ impl ShutterIntegrator for Bdpt {
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
-        let s = &self.settings;
-        render_with_splats_time_sampled(self, scenes, frame, s.spp, s.seed, progress)
+        // The caustic photon pass needs one scene (crate::bdpt::caustic, "Limits"): with
+        // a shutter, BDPT keeps its own estimate of every path.
+        let plain = Bdpt::new(crate::bdpt::BdptSettings {
+            caustic_photons: 0,
+            ..self.settings.clone()
+        });
+        let s = &plain.settings;
+        render_with_splats_time_sampled(&plain, scenes, frame, s.spp, s.seed, progress)
     }
 }
 

@@ -35,7 +35,9 @@ pub struct Contribution {
 ///   connection with visibility. (s, t) = (1, 1) and t = 0 are not strategies here.
 /// - The sum over all (s, t) with s + t − 1 ≤ max_depth (segments) is an unbiased
 ///   estimate of the pixel measurement (MIS weights sum to 1 over the strategies able to
-///   produce a path; Russian roulette only rescales subpath throughputs).
+///   produce a path; Russian roulette only rescales subpath throughputs) — without the
+///   paths E S⁺ X S⁺ L when [`BdptSettings::caustics`] is on (s = 0 drops them, the
+///   caustic photon estimate [`super::caustic`] adds them).
 #[allow(clippy::too_many_arguments)] // reason: the two subpaths, the strategy and the streams
 pub fn connect(
     scene: &FrameScene,
@@ -105,6 +107,10 @@ pub fn connect_with(
     let l = if s == 0 {
         let pt = &camera[t - 1];
         if t < 2 || !pt.is_light(scene) {
+            return None;
+        }
+        // E S⁺ X S⁺ L: left to the caustic photon estimate (its only strategy is this one).
+        if settings.caustics() && super::caustic::is_caustic_path(camera, t) {
             return None;
         }
         pt.le(scene, &camera[t - 2]) * pt.beta

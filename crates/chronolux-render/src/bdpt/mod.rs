@@ -17,6 +17,7 @@
 //! Sample streams: every number of a sample of pixel p — camera raster, camera subpath,
 //! light subpath, connections — comes from that pixel's [`PixelSampler`], in that order.
 
+pub mod caustic;
 pub mod connect;
 pub mod vertex;
 
@@ -78,6 +79,14 @@ pub struct BdptSettings {
     /// that stbpt can reuse it across frames (its "path mode"). Default false.
     #[serde(default)]
     pub path_strategies: bool,
+    /// Caustics seen through glass ([`caustic`]): photons emitted per frame for the
+    /// density estimate of the paths E S⁺ X S⁺ L, whose s = 0 contribution the strategies
+    /// then drop; 0 = off (every path by the strategies alone). Only with unlimited depth
+    /// (`max_depth = None`; ignored otherwise). Default 0 (off in every preset: on the demo
+    /// these paths are not where its fireflies come from, BENCHMARKS.md "Issue 17:
+    /// caustics through glass"); 200 000 is the count measured there.
+    #[serde(default)]
+    pub caustic_photons: u64,
 }
 
 fn yes() -> bool {
@@ -94,6 +103,7 @@ impl Default for BdptSettings {
             mis: MisHeuristic::Power,
             light_tracing: true,
             path_strategies: false,
+            caustic_photons: 0,
         }
     }
 }
@@ -112,6 +122,13 @@ impl BdptSettings {
     /// [`BdptSettings::path_strategies`].
     pub fn max_light_vertices(&self, light_len: usize) -> usize {
         if self.path_strategies { 1 } else { light_len }
+    }
+
+    /// Whether the caustic photon estimate is on ([`caustic`]): photons requested and the
+    /// depth unlimited. When it is, the strategies drop the s = 0 contribution of the
+    /// paths E S⁺ X S⁺ L and [`caustic::add_caustics`] must add the photon estimate.
+    pub fn caustics(&self) -> bool {
+        self.caustic_photons > 0 && self.max_depth.is_none()
     }
 }
 
@@ -431,14 +448,16 @@ impl Integrator for Bdpt {
         frame: u32,
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
-        render_with_splats(
+        let mut f = render_with_splats(
             self,
             scene,
             frame,
             self.settings.spp,
             self.settings.seed,
             progress,
-        )
+        );
+        caustic::add_caustics(&mut f, scene, &self.settings);
+        f
     }
 
     fn batch(&self, spp: u32, round: u32, half: u32) -> Option<Box<dyn Integrator + Send>> {

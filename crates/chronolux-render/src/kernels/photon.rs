@@ -173,6 +173,46 @@ pub fn trace_photon_path(
     scene: &FrameScene,
     index: u64,
     seed: u64,
+    on_light: impl FnMut(usize, &Ray),
+    on_vertex: impl FnMut(&PathVertex),
+    on_escape: impl FnMut(&Ray),
+) -> PhotonStats {
+    walk(scene, index, seed, false, on_light, on_vertex, on_escape)
+}
+
+/// [`trace_photon`] restricted to caustic photons: the same photon `index` (same numbers,
+/// same path as long as it lasts), reporting only its deposits with
+/// [`PhotonHit::caustic`] set (light → specular⁺ → here), and ending the path at its first
+/// non-delta bounce, after which no deposit can be a caustic one. A photon whose first hit
+/// is on a surface without a delta lobe costs one ray.
+pub fn trace_caustic_photon(
+    scene: &FrameScene,
+    index: u64,
+    seed: u64,
+    mut callback: impl FnMut(&PhotonHit),
+) -> PhotonStats {
+    walk(
+        scene,
+        index,
+        seed,
+        true,
+        |_, _| {},
+        |v| {
+            if v.deposited && v.hit.caustic {
+                callback(&v.hit)
+            }
+        },
+        |_| {},
+    )
+}
+
+/// The photon walk of [`trace_photon_path`]; with `specular_only`, the walk ends at the
+/// first bounce that samples a non-delta lobe (everything before it is unchanged).
+fn walk(
+    scene: &FrameScene,
+    index: u64,
+    seed: u64,
+    specular_only: bool,
     mut on_light: impl FnMut(usize, &Ray),
     mut on_vertex: impl FnMut(&PathVertex),
     mut on_escape: impl FnMut(&Ray),
@@ -250,6 +290,9 @@ pub fn trace_photon_path(
         ) else {
             break;
         };
+        if specular_only && !bs.is_delta {
+            break;
+        }
         let new_beta = beta * bs.weight;
         let q = (max_component(new_beta) / max_component(beta)).min(1.0);
         if !(q > 0.0) || h(d + 3) >= q {

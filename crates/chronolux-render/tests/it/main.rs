@@ -4,6 +4,7 @@
 mod aov;
 mod bdpt;
 mod blur;
+mod caustic;
 mod delta;
 mod dept;
 mod determinism;

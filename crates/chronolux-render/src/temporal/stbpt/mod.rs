@@ -599,7 +599,7 @@ impl SequenceRenderer for Stbpt {
             );
         }
         self.strategy_decisions.retain(|&f, _| f > frame);
-        RenderedFrame {
+        let mut out = RenderedFrame {
             width: w,
             height: h,
             pixels,
@@ -609,7 +609,11 @@ impl SequenceRenderer for Stbpt {
             report,
             // The reused subpaths are not split into direct and indirect light.
             light: None,
-        }
+        };
+        // The served frame's caustics seen through glass: the reused samples' s = 0 drops
+        // those paths (bdpt::connect_with), this frame's photons add them.
+        crate::bdpt::caustic::add_caustics(&mut out, &scene, &self.settings.bdpt);
+        out
     }
 }
 

@@ -9,6 +9,31 @@
 //! area lights are handled as in pbrt-v4: connections to delta vertices are skipped and
 //! the MIS weights exclude the strategies that cannot produce a path.
 //!
+//! ## Densities through delta vertices (not as in pbrt-v4)
+//! A delta lobe's solid-angle density is a Dirac delta; it appears once in every strategy
+//! able to produce a path through that vertex (sampled forward by one, backward by the
+//! other, equal under reciprocity), so it cancels from the ratios of the MIS weights. The
+//! geometry factor `|cos θ| / d²` that converts the *next* vertex's density to area measure
+//! does not cancel. pbrt-v4 stores 0 as the delta lobe's density (remapped to 1 in the
+//! weights), which drops that factor too: the vertex after a delta vertex gets area
+//! density 1 whatever its distance and angle, in both directions. Here the delta lobe's
+//! density is 1 and the conversion is kept, so the ratios are those of the true path
+//! densities (up to the `η²` of a single refraction, which cancels on a path entering and
+//! leaving the same medium). The difference matters where a path has two strategies on
+//! either side of a specular chain: the caustic at the foot of the demo's glass sphere
+//! (E D S S L: light tracing against the camera path hitting the lamp) and the floor lit
+//! through the glass and seen after a diffuse bounce (E S S D D S S L), which carried most
+//! of the variance through the sphere (`bench-results/2026-12-02-caustics/`). For the
+//! first, the ratio of light tracing's density to the camera path's is, exactly,
+//! `p_A(L) p_ω(L→d) cos_D / (p_cam(D) p_ω(D→c) cos_L)`; pbrt-v4's convention multiplies it
+//! by `cos_d |D−c|² cos_L / (|L−d|² cos_c cos_D)`, i.e. by the square of the short hop
+//! from the sphere to the floor over the long one from the lamp: tens to hundreds of times
+//! too small, so the camera path's s = 0 strategy kept weight near 1 for rare, bright
+//! paths. The weights still sum to 1 for every path (all strategies derive their ratios
+//! from the same stored densities), so the estimator is unbiased either way; the change
+//! lowers the variance: the demo's HDR-FLIP at equal samples falls 5–11 % for `bdpt` and
+//! `stbpt` (BENCHMARKS.md, "Issue 17: densities through delta vertices").
+//!
 //! The kernel is three public functions the spatio-temporal technique reuses:
 //! [`generate_camera_subpath`], [`generate_light_subpath`] and [`connect::connect`].
 //! [`Bdpt`] composes them per pixel sample; [`crate::integrator::render_with_splats`]
@@ -209,9 +234,11 @@ fn random_walk<T: FnMut(&Ray) -> Option<Hit>>(
         let (p, ng) = (sv.si.p, sv.si.ng);
         let n = path.len();
         if bs.is_delta {
+            // The delta cancels from the MIS ratios; the next conversion's cos / d² must
+            // not (module doc, "Densities through delta vertices").
             path[n - 1].delta = true;
-            pdf_fwd = 0.0;
-            pdf_rev = 0.0;
+            pdf_fwd = 1.0;
+            pdf_rev = 1.0;
         }
         let rev = path[n - 1].convert_density(pdf_rev, &path[n - 2]);
         path[n - 2].pdf_rev = rev;

@@ -356,45 +356,26 @@ fn stbpt_runs(
 /// The path strategies (`path_strategies`: s ≤ 1 only, MIS over those, no light subpath),
 /// reused across frames through the same validity machinery, are unbiased: the test and
 /// tolerance of [`stbpt_frame_agrees_with_its_own_reference_on_a_moving_animation`],
-/// without caustics ([`without_caustics`]). On the moving demo, frame 0 against its own
-/// BDPT image. Under the moving camera, against stbpt with all strategies (no light
-/// tracing: the camera moves) in the same configuration, 24 runs, as the reference (per
-/// pixel the mean and the variance of the mean): both land the same camera samples (same
-/// camera stream) and so estimate the same landing-density filter of the image, which
-/// differs from the frame's own image near the image border when the camera trucks
-/// (module doc, "Bias"; measured here for all strategies against the BDPT image: +3 to
-/// +7 % on the left column of blocks, t up to 7.2, the same for the path strategies).
+/// without caustics ([`without_caustics`]), frame 0 against its own BDPT image, on the
+/// moving demo and under the moving camera of the dolly.
 #[test]
 fn stbpt_path_strategies_agree_with_bdpt_on_a_moving_animation() {
     let (k, spp, runs, fps) = (2u32, 2u32, 12u64, 3.0f32);
     let out = 0u32;
-    let demo = without_caustics(stage::demo());
-    let reference = bdpt_reference(demo.clone(), fps, out, 256);
-    let imgs = stbpt_runs(&demo, fps, out, k, spp, true, 0..runs);
-    assert_agree(&imgs, &reference, "moving demo, path strategies");
-
-    let dolly = without_caustics(stage::dolly());
-    let all = stbpt_runs(&dolly, fps, out, k, spp, false, 100..124);
-    let n = all.len() as f32;
-    let npx = (W * H) as usize;
-    let mean: Vec<glam::Vec3> = (0..npx)
-        .map(|i| all.iter().map(|r| r.pixels[i]).sum::<glam::Vec3>() / n)
-        .collect();
-    let var_of_mean: Vec<glam::Vec3> = (0..npx)
-        .map(|i| {
-            let m = mean[i];
-            all.iter()
-                .map(|r| (r.pixels[i] - m) * (r.pixels[i] - m))
-                .sum::<glam::Vec3>()
-                / (n - 1.0)
-                / n
-        })
-        .collect();
-    let reference = Estimate::new(W, H, &mean, &var_of_mean);
-    let imgs = stbpt_runs(&dolly, fps, out, k, spp, true, 0..runs);
-    let runs: Vec<&[glam::Vec3]> = imgs.iter().map(|r| r.pixels.as_slice()).collect();
-    block_t_test(&runs, &reference, BLOCK, 0.01)
-        .assert_passes("moving camera, path strategies against all strategies");
+    for (what, desc) in [
+        (
+            "moving demo, path strategies",
+            without_caustics(stage::demo()),
+        ),
+        (
+            "moving camera, path strategies",
+            without_caustics(stage::dolly()),
+        ),
+    ] {
+        let reference = bdpt_reference(desc.clone(), fps, out, 256);
+        let imgs = stbpt_runs(&desc, fps, out, k, spp, true, 0..runs);
+        assert_agree(&imgs, &reference, what);
+    }
 }
 
 /// A frame served by generated frames of both kinds (some with light tracing, some with
@@ -502,4 +483,23 @@ fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
             assert_eq!(d.decision, if f == 4 { "probe" } else { "bdpt" }, "{d:?}");
         }
     }
+}
+
+/// Under a moving camera (the built-in `dolly`: the camera trucks, dollies and turns,
+/// about a tenth of the room per frame at 3 fps), stbpt with all strategies (no light
+/// tracing, the camera moves) agrees with the frame's own BDPT image block by block: the
+/// test and tolerance of [`stbpt_frame_agrees_with_its_own_reference_on_a_moving_animation`],
+/// without caustics ([`without_caustics`]). Frame 0's left pixel column shows the room's
+/// open edge against the black background; frames 1 and 2, seen from further right, do
+/// not see all of that pixel's footprint. Checked: taking their landings there anyway (and
+/// landing escaped rays where g's ray meets a surface) fails this test, block (0, 3) at
+/// t = 7.2 (+7 %; that pixel column +65 %): module doc, "Bias".
+#[test]
+fn stbpt_agrees_with_bdpt_under_a_moving_camera() {
+    let (k, spp, runs, fps) = (2u32, 2u32, 12u64, 3.0f32);
+    let out = 0u32;
+    let dolly = without_caustics(stage::dolly());
+    let reference = bdpt_reference(dolly.clone(), fps, out, 256);
+    let imgs = stbpt_runs(&dolly, fps, out, k, spp, false, 0..runs);
+    assert_agree(&imgs, &reference, "moving camera, all strategies");
 }

@@ -212,6 +212,9 @@ pub(super) struct Generation<'a> {
     /// tracing and frames without it may serve the same frames (module doc, "BDPT or the
     /// path strategies").
     pub(super) count_lt: bool,
+    /// Per window frame, which of its pixels take landings from f
+    /// ([`Generation::coverage`]; empty while it is computed: all).
+    pub(super) coverage: &'a [super::landing::Coverage],
 }
 
 /// A sample landed in window frame `j` at `raster` with `value` (buffered until the
@@ -943,6 +946,13 @@ impl Stbpt {
             path_bdpt: &path_bdpt,
             pilot: adaptive,
             count_lt: light_tracing && adaptive,
+            coverage: &[],
+        };
+        let mut stats = vec![Stats::default(); frames.len()];
+        let coverage = gen_all.coverage(&mut stats);
+        let gen_all = Generation {
+            coverage: &coverage,
+            ..gen_all
         };
         // All strategies without the measurements (a frame with all strategies measures
         // at the pilot pixels only: enough for the comparison, a quarter of its work).
@@ -976,7 +986,6 @@ impl Stbpt {
         let n = frames.len();
         let spp = self.settings.bdpt.spp;
         let mut counts = Counts::new(n);
-        let mut stats = vec![Stats::default(); n];
         let mut pilot = Pilot::new(w, h);
         let with_all = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))

@@ -8,6 +8,7 @@ use crate::bdpt::Vertex;
 use chronolux_core::accel::multi_frame::FrameMask;
 use chronolux_core::geometry::{Ray, spawn_ray_to};
 use chronolux_core::math::{Vec2, Vec3};
+use chronolux_core::parallel;
 use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::desc::Projection;
 use chronolux_core::scene::frame::FrameScene;
@@ -19,7 +20,9 @@ use chronolux_core::stats::Stats;
 pub(super) enum Landing {
     /// It does not land in g: g's camera is not a pinhole, or x1 is off g's screen, seen
     /// from the other side than in f, occluded in g, or moved and not locatable on its
-    /// triangle; or an escaped camera ray's direction is off g's screen. It does not serve
+    /// triangle; or an escaped camera ray's direction is off g's screen or g's ray there
+    /// meets a surface; or the pixel it lands in is one f does not wholly see
+    /// ([`Generation::coverage`]). It does not serve
     /// g's camera part (its light subpath still serves g's light tracing).
     Missed,
     /// An escaped camera ray reused as it is: g's camera has f's placement and the ray
@@ -102,9 +105,20 @@ impl Generation<'_> {
             return match walk
                 .escape
                 .and_then(|r| cam_g.project(eye + r.d.normalize()))
+                .filter(|&r| self.covered(j, r))
             {
                 Some(r) if same_camera && walk.cam_valid >> j & 1 == 1 => Landing::ReuseEscaped(r),
-                Some(r) => Landing::Retrace(r),
+                Some(r) => {
+                    // g's camera ray there must escape too: where it meets a surface, that
+                    // surface's own landings from f already serve the point (the landing
+                    // would count it twice: module doc, "Bias").
+                    stats[j].rays += 1;
+                    if scene_g.intersect(&cam_g.generate_ray(r)).is_some() {
+                        Landing::Missed
+                    } else {
+                        Landing::Retrace(r)
+                    }
+                }
                 None => Landing::Missed,
             };
         };
@@ -124,7 +138,7 @@ impl Generation<'_> {
         let wo_g = (eye - p).normalize_or_zero();
         // Seen from the same side of the surface as in f.
         let faces = sv.si.ng.dot(sv.wo) * ng.dot(wo_g) > 0.0;
-        let Some(r) = cam_g.project(p).filter(|_| faces) else {
+        let Some(r) = cam_g.project(p).filter(|&r| faces && self.covered(j, r)) else {
             return Landing::Missed;
         };
         let shared = !moved && eye == eye_f && self.materials_same >> j & 1 == 1;
@@ -160,6 +174,116 @@ impl Generation<'_> {
         } else {
             Landing::Retrace(r)
         }
+    }
+}
+
+/// Which pixels of a window frame g take landings from f (module doc, "Bias"): `None`
+/// when all do (g's camera and geometry are f's, so f sees every point g sees), else
+/// per pixel of g whether its test points ([`Generation::coverage`]) are all seen by f.
+pub(super) type Coverage = Option<Vec<bool>>;
+
+impl Generation<'_> {
+    /// Whether pixel `r` (raster position) of window frame `j` takes landings from f.
+    fn covered(&self, j: usize, r: Vec2) -> bool {
+        let Some(Some(c)) = self.coverage.get(j) else {
+            return true;
+        };
+        let w = self.scenes[j].camera.width;
+        let h = self.scenes[j].camera.height;
+        c[((r.y as u32).min(h - 1) * w + (r.x as u32).min(w - 1)) as usize]
+    }
+
+    /// Per window frame g, which of its pixels take landings from f: those whose footprint
+    /// f sees, tested at its four corners and its centre ([`Generation::seen_by_f`]). A
+    /// pixel part of which f does not see (off f's screen, hidden in f, or background
+    /// that f sees covered) would take f's landings only on the part f sees: its mean
+    /// would be that part's (module doc, "Bias"). The rays are counted in `stats[j]`.
+    pub(super) fn coverage(&self, stats: &mut [Stats]) -> Vec<Coverage> {
+        let scene_f = &self.scenes[self.jf];
+        (0..self.scenes.len())
+            .map(|j| {
+                let d = &self.from_f[j];
+                let scene_g = &self.scenes[j];
+                let static_view = !d.camera_changed()
+                    && !d.materials_changed()
+                    && (0..d.instance_count()).all(|i| !d.instance_changed(i));
+                if j == self.jf || static_view {
+                    return None;
+                }
+                if !matches!(scene_g.camera.projection, Projection::Perspective { .. })
+                    || !matches!(scene_f.camera.projection, Projection::Perspective { .. })
+                {
+                    return None;
+                }
+                let (w, h) = (scene_g.camera.width, scene_g.camera.height);
+                // Test points inside the image: the corners on the border are moved in
+                // by a thousandth of a pixel.
+                let at = |x: u32, y: u32, half: f32| {
+                    let e = 1e-3;
+                    Vec2::new(
+                        (x as f32 + half).clamp(e, w as f32 - e),
+                        (y as f32 + half).clamp(e, h as f32 - e),
+                    )
+                };
+                // Rows of corners (h + 1 of w + 1) and of centres (h of w).
+                let rows = parallel::map_chunks(2 * h as usize + 1, 1, |range| {
+                    let mut st = Stats::default();
+                    let seen: Vec<Vec<bool>> = range
+                        .map(|i| {
+                            let (y, half, n) =
+                                ((i / 2) as u32, (i % 2) as f32 * 0.5, w + 1 - (i % 2) as u32);
+                            (0..n)
+                                .map(|x| self.seen_by_f(j, at(x, y, half), &mut st))
+                                .collect()
+                        })
+                        .collect();
+                    (seen, st)
+                });
+                let mut grid: Vec<Vec<bool>> = Vec::with_capacity(2 * h as usize + 1);
+                for (seen, st) in rows {
+                    stats[j] += st;
+                    grid.extend(seen);
+                }
+                let mut c = vec![false; (w * h) as usize];
+                for y in 0..h as usize {
+                    for x in 0..w as usize {
+                        let (top, mid, bottom) = (&grid[2 * y], &grid[2 * y + 1], &grid[2 * y + 2]);
+                        c[y * w as usize + x] =
+                            top[x] && top[x + 1] && mid[x] && bottom[x] && bottom[x + 1];
+                    }
+                }
+                Some(c)
+            })
+            .collect()
+    }
+
+    /// Whether f sees what window frame g sees through raster position `q`: the surface
+    /// point (moved with its object into f) on f's screen, from the same side as g and
+    /// unoccluded from f's eye; or, where g's ray escapes, the same direction escaping
+    /// from f's eye on f's screen. One closest-hit query in g and one shadow query in f.
+    fn seen_by_f(&self, j: usize, q: Vec2, st: &mut Stats) -> bool {
+        let (scene_f, scene_g) = (&self.scenes[self.jf], &self.scenes[j]);
+        let ray = scene_g.camera.generate_ray(q);
+        let eye_f = scene_f.camera.position();
+        st.rays += 1;
+        st.shadow_rays += 1;
+        let Some(hit) = scene_g.intersect(&ray) else {
+            return scene_f.camera.project(eye_f + ray.d.normalize()).is_some()
+                && !scene_f.occluded(&Ray::new(eye_f, ray.d));
+        };
+        let geom = hit.tri.geometry;
+        let si_g = scene_g.surface_at(hit.tri, hit.instance, hit.b1, hit.b2, Some(ray.at(hit.t)));
+        let (p, ng) = if self.same_surface(self.jf, j, geom) {
+            (si_g.p, si_g.ng)
+        } else {
+            let inst = scene_f.geometry_instance[geom as usize];
+            let si = scene_f.surface_at(hit.tri, inst, hit.b1, hit.b2, None);
+            (si.p, si.ng)
+        };
+        let faces = si_g.ng.dot(-ray.d) * ng.dot(eye_f - p) > 0.0;
+        faces
+            && scene_f.camera.project(p).is_some()
+            && !scene_f.occluded(&spawn_ray_to(p, ng, eye_f, Vec3::ZERO))
     }
 }
 

@@ -86,7 +86,7 @@ fn query_cost(s: &Stats) -> f64 {
 }
 
 /// Two answers of one ray that give the same vertex.
-fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
+pub(super) fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
     match (a, b) {
         (None, None) => true,
         (Some(a), Some(b)) => {

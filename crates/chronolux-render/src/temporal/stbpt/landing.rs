@@ -5,6 +5,7 @@
 
 use super::generation::Generation;
 use crate::bdpt::Vertex;
+use chronolux_core::accel::Hit;
 use chronolux_core::accel::multi_frame::FrameMask;
 use chronolux_core::geometry::{Ray, spawn_ray_to};
 use chronolux_core::math::{Vec2, Vec3};
@@ -194,62 +195,111 @@ impl Generation<'_> {
     }
 
     /// Per window frame g, which of its pixels take landings from f: those whose footprint
-    /// f sees, tested at its four corners and its centre ([`Generation::seen_by_f`]). A
+    /// f sees, tested at its four corners and its centre ([`Generation::seen_from_f`]). A
     /// pixel part of which f does not see (off f's screen, hidden in f, or background
     /// that f sees covered) would take f's landings only on the part f sees: its mean
-    /// would be that part's (module doc, "Bias"). The rays are counted in `stats[j]`.
+    /// would be that part's (module doc, "Bias"). Frames with f's camera and materials
+    /// share one window query per test point (the same ray in every such frame): a point
+    /// g sees on a surface unchanged since f, or background, is seen by f iff f's answer
+    /// along the ray is the same; only a point on a moved surface needs the full test.
+    /// The rays are counted in `stats` (the shared window query in f's).
     pub(super) fn coverage(&self, stats: &mut [Stats]) -> Vec<Coverage> {
-        let scene_f = &self.scenes[self.jf];
-        (0..self.scenes.len())
-            .map(|j| {
-                let d = &self.from_f[j];
+        let (jf, n) = (self.jf, self.scenes.len());
+        let scene_f = &self.scenes[jf];
+        let pinhole =
+            |s: &FrameScene| matches!(s.camera.projection, Projection::Perspective { .. });
+        let (w, h) = (scene_f.camera.width, scene_f.camera.height);
+        // The frames whose view may differ from f's.
+        let mut test: FrameMask = 0;
+        for j in (0..n).filter(|&j| j != jf) {
+            let d = &self.from_f[j];
+            let g = &self.scenes[j];
+            let static_view = !d.camera_changed()
+                && !d.materials_changed()
+                && (0..d.instance_count()).all(|i| !d.instance_changed(i));
+            let size = (g.camera.width, g.camera.height) == (w, h);
+            if !static_view && pinhole(g) && pinhole(scene_f) && size {
+                test |= 1 << j;
+            }
+        }
+        if test == 0 {
+            return vec![None; n];
+        }
+        let shared = test & self.same_camera & self.materials_same;
+        let bits = |m: FrameMask| (0..n).filter(move |&j| m >> j & 1 == 1);
+        // Test points inside the image: the corners on the border are moved in by a
+        // thousandth of a pixel.
+        let at = |x: u32, y: u32, half: f32| {
+            let e = 1e-3;
+            Vec2::new(
+                (x as f32 + half).clamp(e, w as f32 - e),
+                (y as f32 + half).clamp(e, h as f32 - e),
+            )
+        };
+        // The frames that see what g sees at `q`.
+        let seen_at = |q: Vec2, st: &mut [Stats]| -> FrameMask {
+            let mut seen: FrameMask = 0;
+            if shared != 0 {
+                let ray = scene_f.camera.generate_ray(q);
+                st[jf].rays += 1;
+                let wh = self
+                    .mfa
+                    .intersect_window(&ray, shared | 1 << jf, |t, b1, b2| {
+                        scene_f.accept(t, b1, b2)
+                    });
+                let hf = wh.frame(jf);
+                for j in bits(shared) {
+                    let hj = wh.frame(j);
+                    let moved = hj.is_some_and(|h| !self.same_surface(jf, j, h.tri.geometry));
+                    let ok = if moved {
+                        self.seen_from_f(j, &ray, hj, &mut st[j])
+                    } else {
+                        super::generation::same_hit(hj, hf)
+                    };
+                    seen |= u64::from(ok) << j;
+                }
+            }
+            for j in bits(test & !shared) {
                 let scene_g = &self.scenes[j];
-                let static_view = !d.camera_changed()
-                    && !d.materials_changed()
-                    && (0..d.instance_count()).all(|i| !d.instance_changed(i));
-                if j == self.jf || static_view {
+                let ray = scene_g.camera.generate_ray(q);
+                st[j].rays += 1;
+                let hj = scene_g.intersect(&ray);
+                seen |= u64::from(self.seen_from_f(j, &ray, hj, &mut st[j])) << j;
+            }
+            seen
+        };
+        // Rows of corners (h + 1 of w + 1) and of centres (h of w).
+        let rows = parallel::map_chunks(2 * h as usize + 1, 1, |range| {
+            let mut st = vec![Stats::default(); n];
+            let seen: Vec<Vec<FrameMask>> = range
+                .map(|i| {
+                    let (y, half) = ((i / 2) as u32, (i % 2) as f32 * 0.5);
+                    let count = w + 1 - (i % 2) as u32;
+                    (0..count)
+                        .map(|x| seen_at(at(x, y, half), &mut st))
+                        .collect()
+                })
+                .collect();
+            (seen, st)
+        });
+        let mut grid: Vec<Vec<FrameMask>> = Vec::with_capacity(2 * h as usize + 1);
+        for (seen, st) in rows {
+            for (a, b) in stats.iter_mut().zip(st) {
+                *a += b;
+            }
+            grid.extend(seen);
+        }
+        (0..n)
+            .map(|j| {
+                if test >> j & 1 == 0 {
                     return None;
-                }
-                if !matches!(scene_g.camera.projection, Projection::Perspective { .. })
-                    || !matches!(scene_f.camera.projection, Projection::Perspective { .. })
-                {
-                    return None;
-                }
-                let (w, h) = (scene_g.camera.width, scene_g.camera.height);
-                // Test points inside the image: the corners on the border are moved in
-                // by a thousandth of a pixel.
-                let at = |x: u32, y: u32, half: f32| {
-                    let e = 1e-3;
-                    Vec2::new(
-                        (x as f32 + half).clamp(e, w as f32 - e),
-                        (y as f32 + half).clamp(e, h as f32 - e),
-                    )
-                };
-                // Rows of corners (h + 1 of w + 1) and of centres (h of w).
-                let rows = parallel::map_chunks(2 * h as usize + 1, 1, |range| {
-                    let mut st = Stats::default();
-                    let seen: Vec<Vec<bool>> = range
-                        .map(|i| {
-                            let (y, half, n) =
-                                ((i / 2) as u32, (i % 2) as f32 * 0.5, w + 1 - (i % 2) as u32);
-                            (0..n)
-                                .map(|x| self.seen_by_f(j, at(x, y, half), &mut st))
-                                .collect()
-                        })
-                        .collect();
-                    (seen, st)
-                });
-                let mut grid: Vec<Vec<bool>> = Vec::with_capacity(2 * h as usize + 1);
-                for (seen, st) in rows {
-                    stats[j] += st;
-                    grid.extend(seen);
                 }
                 let mut c = vec![false; (w * h) as usize];
                 for y in 0..h as usize {
+                    let (top, mid, bottom) = (&grid[2 * y], &grid[2 * y + 1], &grid[2 * y + 2]);
                     for x in 0..w as usize {
-                        let (top, mid, bottom) = (&grid[2 * y], &grid[2 * y + 1], &grid[2 * y + 2]);
-                        c[y * w as usize + x] =
-                            top[x] && top[x + 1] && mid[x] && bottom[x] && bottom[x + 1];
+                        let all = top[x] & top[x + 1] & mid[x] & bottom[x] & bottom[x + 1];
+                        c[y * w as usize + x] = all >> j & 1 == 1;
                     }
                 }
                 Some(c)
@@ -257,17 +307,15 @@ impl Generation<'_> {
             .collect()
     }
 
-    /// Whether f sees what window frame g sees through raster position `q`: the surface
-    /// point (moved with its object into f) on f's screen, from the same side as g and
-    /// unoccluded from f's eye; or, where g's ray escapes, the same direction escaping
-    /// from f's eye on f's screen. One closest-hit query in g and one shadow query in f.
-    fn seen_by_f(&self, j: usize, q: Vec2, st: &mut Stats) -> bool {
+    /// Whether f sees what window frame g sees along g's camera ray `ray` (its hit in g:
+    /// `hit`): the surface point (moved with its object into f) on f's screen, from the
+    /// same side as g and unoccluded from f's eye; or, where g's ray escapes, the same
+    /// direction escaping from f's eye on f's screen. One shadow query in f.
+    fn seen_from_f(&self, j: usize, ray: &Ray, hit: Option<Hit>, st: &mut Stats) -> bool {
         let (scene_f, scene_g) = (&self.scenes[self.jf], &self.scenes[j]);
-        let ray = scene_g.camera.generate_ray(q);
         let eye_f = scene_f.camera.position();
-        st.rays += 1;
         st.shadow_rays += 1;
-        let Some(hit) = scene_g.intersect(&ray) else {
+        let Some(hit) = hit else {
             return scene_f.camera.project(eye_f + ray.d.normalize()).is_some()
                 && !scene_f.occluded(&Ray::new(eye_f, ray.d));
         };

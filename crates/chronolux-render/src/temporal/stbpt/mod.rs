@@ -113,8 +113,10 @@
 //!   object into f, on f's screen, facing f from g's side and unoccluded from f's eye;
 //!   where g sees the background: the same direction escaping from f's eye), computed per
 //!   generated frame for every window frame g whose camera or geometry differs from f's
-//!   (one closest-hit and one shadow query per test point: about two of each per pixel
-//!   and window frame; a static pair costs nothing);
+//!   (about two test points per pixel; with a moving camera one closest-hit and one
+//!   shadow query per point and window frame; with f's camera one window query per point
+//!   answers every such frame, and only points on a moved surface need a shadow query;
+//!   a static pair costs nothing);
 //! - an escaped ray lands in g only where g's camera ray escapes too.
 //!
 //! Every point g sees then has at most one landing preimage in f, and on a pixel that

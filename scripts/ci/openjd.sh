@@ -14,7 +14,7 @@ if [ ! -x "$VENV/bin/openjd" ]; then
 fi
 OPENJD="$VENV/bin/openjd"
 
-ARGS=(--method stbpt --window 1 --set adaptive=false --frames 0..6 --resolution 16x16 --spp 1 --no-preview)
+ARGS=(--method stbpt --window 1 --frames 0..6 --resolution 16x16 --spp 1 --no-preview)
 "$BIN" render "${ARGS[@]}" --output "$WORK/single" 2>/dev/null
 "$BIN" farm openjd "${ARGS[@]}" --segment-length 2 --output "$WORK/farm"
 "$OPENJD" check "$WORK/farm/job.template.yaml"

@@ -101,7 +101,7 @@ same() {
     done
 }
 
-ARGS=(--method stbpt --window 1 --set adaptive=false --frames 0..6 --resolution 24x24 --spp 2 --no-preview)
+ARGS=(--method stbpt --window 1 --frames 0..6 --resolution 24x24 --spp 2 --no-preview)
 "$BIN" render "${ARGS[@]}" --output "$WORK/single" 2>/dev/null
 
 # 1. A job array of 3 segments and an afterok assemble job.

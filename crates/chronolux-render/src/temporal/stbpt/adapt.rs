@@ -1,7 +1,8 @@
 //! Self-assessment (module doc, "Choosing K"): from what the samples of a generated frame
 //! gave the frames around it, [`assess`] decides whether serving each distance paid for
-//! itself and chooses the window half-width K of the next generated frame — down to
-//! K = 0, frame-by-frame BDPT, when reuse does not pay at all. The decision and the
+//! itself and, on a grid frame ([`GRID`]), chooses the window half-width K of the frames
+//! up to the next grid frame — down to K = 0, frame-by-frame BDPT, when reuse does not
+//! pay at all. The decision and the
 //! statistics it came from are reported per frame ([`WindowDecision`], `reuse_decision` in
 //! `run.json`). Everything here is computed from counts (landings, ray queries), never
 //! from timings, so images stay bit-identical across thread counts and runs.
@@ -22,9 +23,12 @@ pub const REUSE_WORTH: f64 = 0.7;
 /// rounded up).
 pub const LANDING_COST: f64 = 0.05;
 
-/// Generated frames at K = 0 after which one frame is generated at K = 1 to measure again
-/// whether reuse pays (the statistics only exist for distances that were served).
-pub const PROBE_EVERY: u32 = 4;
+/// Period of the measuring frames: frame f is a **grid frame** when f is a multiple of
+/// `GRID` (a global frame index, whatever the render list or the farm segment). Grid
+/// frames are generated at the cap K with all strategies and the pilot's measurements;
+/// every decision for the frames f + 1 .. f + GRID − 1 (their K and their strategies) is
+/// a function of that grid frame's measurement alone (module doc, "Choosing K").
+pub const GRID: u32 = 4;
 
 /// What the samples of one generated frame gave the frames at one distance (one frame
 /// before and one after, when both are in the render list). Per generated sample.
@@ -63,12 +67,14 @@ pub struct WindowDecision {
     pub k: u32,
     /// The largest K allowed (the `window` setting).
     pub k_max: u32,
-    /// K chosen for the next generated frame.
+    /// K of the frames up to the next grid frame ([`GRID`]): chosen on a grid frame, its
+    /// grid frame's choice on the others.
     pub k_next: u32,
-    /// Why, in words: `grow`, `keep`, `shrink`, `frame-by-frame` (reuse did not pay at
-    /// distance 1: the effort goes into fresh BDPT samples as frame-by-frame `bdpt` would
-    /// spend it), `probe` (K = 1 after `PROBE_EVERY` frames at K = 0), `minimum` (reuse did
-    /// not pay but motion blur needs K ≥ 1), `fixed` (adaptation off or nothing to choose).
+    /// Why, in words (on a grid frame): `keep` (every distance paid), `shrink`,
+    /// `frame-by-frame` (reuse did not pay at distance 1: the effort goes into fresh BDPT
+    /// samples as frame-by-frame `bdpt` would spend it), `minimum` (reuse did not pay but
+    /// motion blur needs K ≥ 1); `grid` on the other frames (their grid frame's choice);
+    /// `fixed` (adaptation off or nothing to choose).
     pub decision: String,
     /// Frames served per generated sample, its own included.
     pub served_per_sample: f64,
@@ -94,14 +100,13 @@ pub struct Served {
 /// The decision after generating a frame with window half-width `k` (`frames`: its window
 /// frames, the generated frame itself at distance 0; `generated`: samples generated).
 /// K stays within `k_min..=k_max` (`k_min` = 1 with motion blur, which needs the
-/// neighbouring frames). `zero_run` counts the consecutive generated frames at K = 0
-/// (updated here).
+/// neighbouring frames). A function of these statistics alone: on a grid frame (`k` =
+/// `k_max`, its window every frame within `k_max`, in the render list or not), of the
+/// grid frame's index and the scene only.
 ///
 /// Rule: serving distance d pays when the landings' value exceeds their cost
 /// ([`DistanceStats::pays`]). K_next is the largest d such that every distance 1..=d
-/// present paid; when all of 1..=k paid it grows to k + 1 (one step, so that the new
-/// distance is measured before going further), at most `k_max`. At K = 0 nothing is
-/// measured: after [`PROBE_EVERY`] such frames one frame is generated at K = 1.
+/// present paid (`k` when all did).
 pub fn assess(
     frames: &[Served],
     generated: u64,
@@ -109,7 +114,6 @@ pub fn assess(
     k_min: u32,
     k_max: u32,
     adaptive: bool,
-    zero_run: &mut u32,
 ) -> WindowDecision {
     let g = generated.max(1) as f64;
     let queries = |s: &Stats| (s.rays + s.shadow_rays) as f64;
@@ -149,22 +153,13 @@ pub fn assess(
     let cost_per_sample = 1.0 + retrace_cost + distances.iter().map(|d| d.cost).sum::<f64>();
     let (k_next, decision) = if !adaptive || k_max <= k_min {
         (k_max, "fixed")
-    } else if k == 0 {
-        *zero_run += 1;
-        if *zero_run >= PROBE_EVERY {
-            (1, "probe")
-        } else {
-            (0, "frame-by-frame")
-        }
     } else {
-        // Distances absent from the render list (its ends, gaps) count as paying: no
-        // evidence against them.
+        // Distances without a frame (before frame 0) count as paying: no evidence
+        // against them.
         let paying = (1..=k)
             .take_while(|&d| distances.iter().all(|s| s.distance != d || s.pays()))
             .count() as u32;
-        if paying == k && k < k_max {
-            (k + 1, "grow")
-        } else if paying == k {
+        if paying == k && k > 0 {
             (k, "keep")
         } else if paying < k_min {
             (k_min, "minimum")
@@ -174,9 +169,6 @@ pub fn assess(
             (paying, "shrink")
         }
     };
-    if k_next > 0 {
-        *zero_run = 0;
-    }
     WindowDecision {
         k,
         k_max,

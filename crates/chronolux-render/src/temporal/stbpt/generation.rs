@@ -86,7 +86,7 @@ fn query_cost(s: &Stats) -> f64 {
 }
 
 /// Two answers of one ray that give the same vertex.
-fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
+pub(super) fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
     match (a, b) {
         (None, None) => true,
         (Some(a), Some(b)) => {
@@ -212,6 +212,9 @@ pub(super) struct Generation<'a> {
     /// tracing and frames without it may serve the same frames (module doc, "BDPT or the
     /// path strategies").
     pub(super) count_lt: bool,
+    /// Per window frame, which of its pixels take landings from f
+    /// ([`Generation::coverage`]; empty while it is computed: all).
+    pub(super) coverage: &'a [super::landing::Coverage],
 }
 
 /// A sample landed in window frame `j` at `raster` with `value` (buffered until the
@@ -860,17 +863,68 @@ impl Generation<'_> {
 }
 
 impl Stbpt {
-    /// Generates the samples of frame `f` with window half-width `k`, adds them to every
-    /// frame of its window and assesses what serving each distance gave
-    /// ([`adapt::assess`]): sets the K of the next generated frame.
-    pub(super) fn generate(
+    /// Generates the samples of frame `f` of the render list: without adaptivity at the
+    /// cap K with the strategies of the settings; with it, a grid frame ([`adapt::GRID`])
+    /// at the cap K with the measurements, any other frame with the K and strategies its
+    /// grid frame chose (generating that grid frame first when this process has not:
+    /// a farm segment starting after it).
+    pub(super) fn generate_next(
+        &mut self,
+        source: &mut FrameSource,
+        f: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) {
+        let cap = self.k();
+        let path = self.settings.bdpt.path_strategies;
+        if !self.settings.adaptive {
+            let mode = if path { Mode::Path } else { Mode::Bdpt };
+            let frames = source.window(f, cap, cap);
+            return self.generate(source, f, cap, mode, frames, progress);
+        }
+        let g = f - f % adapt::GRID;
+        if !self.grid.contains_key(&g) {
+            self.generate_grid(source, g, progress);
+        }
+        if f != g {
+            let (k, mode) = self.grid[&g];
+            let frames = source.window(f, k, k);
+            self.generate(source, f, k, mode, frames, progress);
+        }
+        // Older grid frames are not needed any more (frames come in increasing order).
+        self.grid.retain(|&h, _| h >= g);
+    }
+
+    /// Generates grid frame `g` (module doc, "Choosing K"): at the cap K, all strategies
+    /// measuring at the pilot pixels (a pilot frame when `path_strategies` is set), over
+    /// every frame within the cap whether in the render list or not, so that its
+    /// measurement, and with it every decision it makes, is the same in any process that
+    /// renders any part of the clip. Its landings serve the frames of the render list.
+    fn generate_grid(&mut self, source: &mut FrameSource, g: u32, progress: &(dyn Fn(u64) + Sync)) {
+        let cap = self.k();
+        let mode = if self.settings.bdpt.path_strategies {
+            Mode::Pilot
+        } else {
+            Mode::Bdpt
+        };
+        let frames: Vec<u32> = (g.saturating_sub(cap)..=g.saturating_add(cap)).collect();
+        self.generate(source, g, cap, mode, frames, progress);
+    }
+
+    /// Generates the samples of frame `f` with window half-width `k` and strategies `mode`
+    /// over window `frames`, adds them to every frame of the window that is in the render
+    /// list and assesses what serving each distance gave ([`adapt::assess`],
+    /// [`strategies::decide`]): on a grid frame, the choices of the frames up to the next.
+    fn generate(
         &mut self,
         source: &mut FrameSource,
         f: u32,
         k: u32,
+        mode: Mode,
+        frames: Vec<u32>,
         progress: &(dyn Fn(u64) + Sync),
     ) {
-        let frames = source.window(f, k, k);
+        let list = source.frames().to_vec();
+        let in_list = |g: u32| list.binary_search(&g).is_ok();
         let scenes: Vec<Arc<FrameScene>> = frames.iter().map(|&g| source.frame(g)).collect();
         let jf = frames
             .iter()
@@ -914,7 +968,6 @@ impl Stbpt {
         // A moving camera turns light tracing off for the whole sequence (module doc,
         // "Bias"): the weights of the kept strategies then sum to one in every frame. The
         // path strategies have none.
-        let mode = self.mode_next;
         let light_tracing = self.settings.bdpt.light_tracing && !source.builder().camera_may_move();
         let bdpt = BdptSettings {
             light_tracing,
@@ -943,6 +996,13 @@ impl Stbpt {
             path_bdpt: &path_bdpt,
             pilot: adaptive,
             count_lt: light_tracing && adaptive,
+            coverage: &[],
+        };
+        let mut stats = vec![Stats::default(); frames.len()];
+        let coverage = gen_all.coverage(&mut stats);
+        let gen_all = Generation {
+            coverage: &coverage,
+            ..gen_all
         };
         // All strategies without the measurements (a frame with all strategies measures
         // at the pilot pixels only: enough for the comparison, a quarter of its work).
@@ -976,7 +1036,6 @@ impl Stbpt {
         let n = frames.len();
         let spp = self.settings.bdpt.spp;
         let mut counts = Counts::new(n);
-        let mut stats = vec![Stats::default(); n];
         let mut pilot = Pilot::new(w, h);
         let with_all = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
@@ -1030,12 +1089,16 @@ impl Stbpt {
                 progress(np * (s as u64 + 1) / spp as u64 - np * s as u64 / spp as u64);
                 out
             });
+            // Landings in frames outside the render list (a grid frame's) only count.
+            let listed = |b: &[Contribution]| -> Vec<Contribution> {
+                b.iter().filter(|c| in_list(c.frame)).copied().collect()
+            };
             for r in &results {
-                film.add_batch(&r.batch);
-                film_sq.add_batch(&r.squares);
-                film_splat.add_batch(&r.splats);
+                film.add_batch(&listed(&r.batch));
+                film_sq.add_batch(&listed(&r.squares));
+                film_splat.add_batch(&listed(&r.splats));
                 for (film, batch) in film_blur.iter_mut().zip(&r.blur) {
-                    film.add_batch(batch);
+                    film.add_batch(&listed(batch));
                 }
                 counts.add(&r.counts);
                 for (a, b) in stats.iter_mut().zip(&r.stats) {
@@ -1064,7 +1127,7 @@ impl Stbpt {
                 }
             }
         }
-        for (j, &g) in frames.iter().enumerate() {
+        for (j, &g) in frames.iter().enumerate().filter(|&(_, &g)| in_list(g)) {
             let p = self.pending.entry(g).or_default();
             p.stats += stats[j];
             p.landed += counts.landed[j];
@@ -1079,9 +1142,7 @@ impl Stbpt {
             p.served_by_light += rho;
         }
         let generated = (w as u64 * h as u64 * spp as u64).max(1);
-        let (next, strategy) = strategies::decide(&pilot, spp, mode, adaptive, &mut self.path_run);
-        self.mode_next = next;
-        self.strategy_decisions.insert(f, strategy);
+        let (next, mut strategy) = strategies::decide(&pilot, spp, mode, adaptive);
         self.served.insert(
             f,
             counts.landed.iter().sum::<u64>() as f64 / generated as f64,
@@ -1105,9 +1166,21 @@ impl Stbpt {
             u32::from(self.settings.shutter > 0.0).min(self.k()),
             self.k(),
             self.settings.adaptive,
-            &mut self.zero_run,
         );
-        self.k_next = decision.k_next;
+        let mut decision = decision;
+        if adaptive {
+            if f.is_multiple_of(adapt::GRID) {
+                self.grid.insert(f, (decision.k_next, next));
+            } else {
+                // The frames up to the next grid frame are made as their grid frame chose.
+                let (k_g, mode_g) = self.grid[&(f - f % adapt::GRID)];
+                decision.k_next = k_g;
+                decision.decision = "grid".to_string();
+                strategy.next = strategies::Mode::name(mode_g);
+                strategy.decision = "grid".to_string();
+            }
+        }
+        self.strategy_decisions.insert(f, strategy);
         self.decisions.insert(f, decision);
     }
 }

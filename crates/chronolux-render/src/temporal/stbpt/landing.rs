@@ -5,9 +5,11 @@
 
 use super::generation::Generation;
 use crate::bdpt::Vertex;
+use chronolux_core::accel::Hit;
 use chronolux_core::accel::multi_frame::FrameMask;
 use chronolux_core::geometry::{Ray, spawn_ray_to};
 use chronolux_core::math::{Vec2, Vec3};
+use chronolux_core::parallel;
 use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::desc::Projection;
 use chronolux_core::scene::frame::FrameScene;
@@ -19,7 +21,9 @@ use chronolux_core::stats::Stats;
 pub(super) enum Landing {
     /// It does not land in g: g's camera is not a pinhole, or x1 is off g's screen, seen
     /// from the other side than in f, occluded in g, or moved and not locatable on its
-    /// triangle; or an escaped camera ray's direction is off g's screen. It does not serve
+    /// triangle; or an escaped camera ray's direction is off g's screen or g's ray there
+    /// meets a surface; or the pixel it lands in is one f does not wholly see
+    /// ([`Generation::coverage`]). It does not serve
     /// g's camera part (its light subpath still serves g's light tracing).
     Missed,
     /// An escaped camera ray reused as it is: g's camera has f's placement and the ray
@@ -102,9 +106,20 @@ impl Generation<'_> {
             return match walk
                 .escape
                 .and_then(|r| cam_g.project(eye + r.d.normalize()))
+                .filter(|&r| self.covered(j, r))
             {
                 Some(r) if same_camera && walk.cam_valid >> j & 1 == 1 => Landing::ReuseEscaped(r),
-                Some(r) => Landing::Retrace(r),
+                Some(r) => {
+                    // g's camera ray there must escape too: where it meets a surface, that
+                    // surface's own landings from f already serve the point (the landing
+                    // would count it twice: module doc, "Bias").
+                    stats[j].rays += 1;
+                    if scene_g.intersect(&cam_g.generate_ray(r)).is_some() {
+                        Landing::Missed
+                    } else {
+                        Landing::Retrace(r)
+                    }
+                }
                 None => Landing::Missed,
             };
         };
@@ -124,7 +139,7 @@ impl Generation<'_> {
         let wo_g = (eye - p).normalize_or_zero();
         // Seen from the same side of the surface as in f.
         let faces = sv.si.ng.dot(sv.wo) * ng.dot(wo_g) > 0.0;
-        let Some(r) = cam_g.project(p).filter(|_| faces) else {
+        let Some(r) = cam_g.project(p).filter(|&r| faces && self.covered(j, r)) else {
             return Landing::Missed;
         };
         let shared = !moved && eye == eye_f && self.materials_same >> j & 1 == 1;
@@ -160,6 +175,163 @@ impl Generation<'_> {
         } else {
             Landing::Retrace(r)
         }
+    }
+}
+
+/// Which pixels of a window frame g take landings from f (module doc, "Bias"): `None`
+/// when all do (g's camera and geometry are f's, so f sees every point g sees), else
+/// per pixel of g whether its test points ([`Generation::coverage`]) are all seen by f.
+pub(super) type Coverage = Option<Vec<bool>>;
+
+impl Generation<'_> {
+    /// Whether pixel `r` (raster position) of window frame `j` takes landings from f.
+    fn covered(&self, j: usize, r: Vec2) -> bool {
+        let Some(Some(c)) = self.coverage.get(j) else {
+            return true;
+        };
+        let w = self.scenes[j].camera.width;
+        let h = self.scenes[j].camera.height;
+        c[((r.y as u32).min(h - 1) * w + (r.x as u32).min(w - 1)) as usize]
+    }
+
+    /// Per window frame g, which of its pixels take landings from f: those whose footprint
+    /// f sees, tested at its four corners and its centre ([`Generation::seen_from_f`]). A
+    /// pixel part of which f does not see (off f's screen, hidden in f, or background
+    /// that f sees covered) would take f's landings only on the part f sees: its mean
+    /// would be that part's (module doc, "Bias"). Frames with f's camera and materials
+    /// share one window query per test point (the same ray in every such frame): a point
+    /// g sees on a surface unchanged since f, or background, is seen by f iff f's answer
+    /// along the ray is the same; only a point on a moved surface needs the full test.
+    /// The rays are counted in `stats` (the shared window query in f's).
+    pub(super) fn coverage(&self, stats: &mut [Stats]) -> Vec<Coverage> {
+        let (jf, n) = (self.jf, self.scenes.len());
+        let scene_f = &self.scenes[jf];
+        let pinhole =
+            |s: &FrameScene| matches!(s.camera.projection, Projection::Perspective { .. });
+        let (w, h) = (scene_f.camera.width, scene_f.camera.height);
+        // The frames whose view may differ from f's.
+        let mut test: FrameMask = 0;
+        for j in (0..n).filter(|&j| j != jf) {
+            let d = &self.from_f[j];
+            let g = &self.scenes[j];
+            let static_view = !d.camera_changed()
+                && !d.materials_changed()
+                && (0..d.instance_count()).all(|i| !d.instance_changed(i));
+            let size = (g.camera.width, g.camera.height) == (w, h);
+            if !static_view && pinhole(g) && pinhole(scene_f) && size {
+                test |= 1 << j;
+            }
+        }
+        if test == 0 {
+            return vec![None; n];
+        }
+        let shared = test & self.same_camera & self.materials_same;
+        let bits = |m: FrameMask| (0..n).filter(move |&j| m >> j & 1 == 1);
+        // Test points inside the image: the corners on the border are moved in by a
+        // thousandth of a pixel.
+        let at = |x: u32, y: u32, half: f32| {
+            let e = 1e-3;
+            Vec2::new(
+                (x as f32 + half).clamp(e, w as f32 - e),
+                (y as f32 + half).clamp(e, h as f32 - e),
+            )
+        };
+        // The frames that see what g sees at `q`.
+        let seen_at = |q: Vec2, st: &mut [Stats]| -> FrameMask {
+            let mut seen: FrameMask = 0;
+            if shared != 0 {
+                let ray = scene_f.camera.generate_ray(q);
+                st[jf].rays += 1;
+                let wh = self
+                    .mfa
+                    .intersect_window(&ray, shared | 1 << jf, |t, b1, b2| {
+                        scene_f.accept(t, b1, b2)
+                    });
+                let hf = wh.frame(jf);
+                for j in bits(shared) {
+                    let hj = wh.frame(j);
+                    let moved = hj.is_some_and(|h| !self.same_surface(jf, j, h.tri.geometry));
+                    let ok = if moved {
+                        self.seen_from_f(j, &ray, hj, &mut st[j])
+                    } else {
+                        super::generation::same_hit(hj, hf)
+                    };
+                    seen |= u64::from(ok) << j;
+                }
+            }
+            for j in bits(test & !shared) {
+                let scene_g = &self.scenes[j];
+                let ray = scene_g.camera.generate_ray(q);
+                st[j].rays += 1;
+                let hj = scene_g.intersect(&ray);
+                seen |= u64::from(self.seen_from_f(j, &ray, hj, &mut st[j])) << j;
+            }
+            seen
+        };
+        // Rows of corners (h + 1 of w + 1) and of centres (h of w).
+        let rows = parallel::map_chunks(2 * h as usize + 1, 1, |range| {
+            let mut st = vec![Stats::default(); n];
+            let seen: Vec<Vec<FrameMask>> = range
+                .map(|i| {
+                    let (y, half) = ((i / 2) as u32, (i % 2) as f32 * 0.5);
+                    let count = w + 1 - (i % 2) as u32;
+                    (0..count)
+                        .map(|x| seen_at(at(x, y, half), &mut st))
+                        .collect()
+                })
+                .collect();
+            (seen, st)
+        });
+        let mut grid: Vec<Vec<FrameMask>> = Vec::with_capacity(2 * h as usize + 1);
+        for (seen, st) in rows {
+            for (a, b) in stats.iter_mut().zip(st) {
+                *a += b;
+            }
+            grid.extend(seen);
+        }
+        (0..n)
+            .map(|j| {
+                if test >> j & 1 == 0 {
+                    return None;
+                }
+                let mut c = vec![false; (w * h) as usize];
+                for y in 0..h as usize {
+                    let (top, mid, bottom) = (&grid[2 * y], &grid[2 * y + 1], &grid[2 * y + 2]);
+                    for x in 0..w as usize {
+                        let all = top[x] & top[x + 1] & mid[x] & bottom[x] & bottom[x + 1];
+                        c[y * w as usize + x] = all >> j & 1 == 1;
+                    }
+                }
+                Some(c)
+            })
+            .collect()
+    }
+
+    /// Whether f sees what window frame g sees along g's camera ray `ray` (its hit in g:
+    /// `hit`): the surface point (moved with its object into f) on f's screen, from the
+    /// same side as g and unoccluded from f's eye; or, where g's ray escapes, the same
+    /// direction escaping from f's eye on f's screen. One shadow query in f.
+    fn seen_from_f(&self, j: usize, ray: &Ray, hit: Option<Hit>, st: &mut Stats) -> bool {
+        let (scene_f, scene_g) = (&self.scenes[self.jf], &self.scenes[j]);
+        let eye_f = scene_f.camera.position();
+        st.shadow_rays += 1;
+        let Some(hit) = hit else {
+            return scene_f.camera.project(eye_f + ray.d.normalize()).is_some()
+                && !scene_f.occluded(&Ray::new(eye_f, ray.d));
+        };
+        let geom = hit.tri.geometry;
+        let si_g = scene_g.surface_at(hit.tri, hit.instance, hit.b1, hit.b2, Some(ray.at(hit.t)));
+        let (p, ng) = if self.same_surface(self.jf, j, geom) {
+            (si_g.p, si_g.ng)
+        } else {
+            let inst = scene_f.geometry_instance[geom as usize];
+            let si = scene_f.surface_at(hit.tri, inst, hit.b1, hit.b2, None);
+            (si.p, si.ng)
+        };
+        let faces = si_g.ng.dot(-ray.d) * ng.dot(eye_f - p) > 0.0;
+        faces
+            && scene_f.camera.project(p).is_some()
+            && !scene_f.occluded(&spawn_ray_to(p, ng, eye_f, Vec3::ZERO))
     }
 }
 

@@ -97,14 +97,37 @@
 //! importance-sampling weight wherever `pdf_f > 0`, which holds for the non-delta,
 //! non-near-specular lobes reuse is restricted to). The pixel value is the mean over the
 //! samples that landed, so it estimates the radiance averaged over the pixel with the
-//! *landing density* instead of the uniform box filter. That density is uniform (the
-//! frame-f density moved by a smooth map) except where landing is interrupted: points
-//! hidden in g, disocclusions (nothing lands where f could not see) and image borders.
-//! The estimator is therefore **consistently biased**: the bias is confined to pixels
-//! containing such an edge and vanishes as the number of samples grows only in the
-//! sense that the estimate converges to a slightly different filter of the image there;
-//! on static animations (and everywhere else) the landing density is uniform and the
-//! result is unbiased.
+//! *landing density*. From one source frame f, that density is f's uniform raster density
+//! moved by a smooth map (1 / its Jacobian) on the part of g's pixel that f sees, and
+//! zero on the rest (off f's screen, hidden in f, background f sees covered). The mean
+//! is then the mean over the part f sees: on the dolly, frame 0's left pixel column
+//! shows the room's open edge against the black background; frames 1 and 2, further
+//! right, see the wall part of it but not the background part, and the column came out
+//! +65 % (its 8×8 blocks +3 to +7 %, t = 7.2: test
+//! `stbpt_agrees_with_bdpt_under_a_moving_camera`). Escaped rays made it worse: landed by
+//! direction, one re-traced where g's ray meets the wall doubled the density there (the
+//! wall's own landings from f serve the same points). So:
+//!
+//! - a pixel of g takes landings from f only if f sees its whole footprint, tested at its
+//!   four corners and its centre (where g sees a surface: that point, moved with its
+//!   object into f, on f's screen, facing f from g's side and unoccluded from f's eye;
+//!   where g sees the background: the same direction escaping from f's eye), computed per
+//!   generated frame for every window frame g whose camera or geometry differs from f's
+//!   (about two test points per pixel; with a moving camera one closest-hit and one
+//!   shadow query per point and window frame; with f's camera one window query per point
+//!   answers every such frame, and only points on a moved surface need a shadow query;
+//!   a static pair costs nothing);
+//! - an escaped ray lands in g only where g's camera ray escapes too.
+//!
+//! Every point g sees then has at most one landing preimage in f, and on a pixel that
+//! passes, the landing density from each f is the smooth one: the estimate is unbiased
+//! up to that density's variation across the pixel (second order in the pixel size,
+//! where the radiance varies linearly) and up to what the five test points miss: a part
+//! of the footprint unseen by f that contains none of them (thinner than half the pixel's
+//! diagonal). For such a pixel the mean is over the seen part: the error is at most its
+//! unseen area fraction times the radiance difference between the two parts. The cost is
+//! the landings dropped, on pixels at silhouettes and on the image border where the
+//! camera trucks or dollies, which are served by fewer frames (noisier, not darker).
 //!
 //! MIS weights are those computed in f. They are the weights of the densities the sample
 //! was drawn with (f's camera sampled x1, f's view sampled the continuation), and the
@@ -153,19 +176,38 @@
 //! counted (not timed, so images do not depend on threads or load): value = 0.7 × reused
 //! landings (a reused sample is worth ≈ 0.7 of a fresh one); cost = the ray queries spent
 //! in those frames other than the re-traces' (landing rays, regenerated light subpaths,
-//! light tracing, partially recomputed strategies) over those of f's own samples (≈ a
-//! BDPT sample each), + 0.05 per landing (BSDF re-evaluation, film writes). A re-traced
-//! landing is a fresh sample at a fresh sample's price and counts neither way. The next
-//! generated frame gets the largest K such that every distance up to K paid, one more
-//! when all did (up to the cap). When distance 1 does not pay, K = 0: the samples serve
-//! only their own frame, i.e. the effort is spent as frame-by-frame `bdpt` spends it
-//! (without light tracing when the camera moves, see "Bias"), or as `path` spends it when
-//! the frame uses the path strategies (next section); every [`adapt::PROBE_EVERY`]
-//! such frames one frame is generated at K = 1 to measure again. With motion blur K ≥ 1
-//! (the trajectories need the neighbouring frames). The decision and its
-//! statistics are reported per frame (`reuse_decision` in `run.json`). A frame's
-//! splats are scaled by the number of generated frames that served it, and a frame is
-//! output once every frame that may serve it (within the cap) is generated.
+//! light tracing, partially recomputed strategies, the coverage test of "Bias") over those
+//! of f's own samples (≈ a BDPT sample each), + 0.05 per landing (BSDF re-evaluation,
+//! film writes). A re-traced landing is a fresh sample at a fresh sample's price and
+//! counts neither way. K is the largest distance such that every distance up to it paid.
+//! When distance 1 does not pay, K = 0: the samples serve only their own frame, i.e. the
+//! effort is spent as frame-by-frame `bdpt` spends it (without light tracing when the
+//! camera moves, see "Bias"), or as `path` spends it when the frame uses the path
+//! strategies (next section). With motion blur K ≥ 1 (the trajectories need the
+//! neighbouring frames). The decision and its statistics are reported per frame
+//! (`reuse_decision` in `run.json`). A frame's splats are scaled by the number of
+//! generated frames that served it, and a frame is output once every frame that may
+//! serve it (within the cap) is generated.
+//!
+//! **Grid frames: the same decisions in any farm segment.** The measurements are made on
+//! the **grid frames**, the frames whose index is a multiple of [`adapt::GRID`] (4): a
+//! grid frame is generated at the cap K with all strategies measuring at the pilot pixels
+//! (next section; a pilot frame when `path_strategies` is set), over every frame within
+//! the cap of it whether it is in the render list or not (its landings in frames outside
+//! the list are counted, not kept), and its measurement chooses K and the strategies of
+//! the frames up to the next grid frame. So every decision is a function of one grid
+//! frame's index and the scene, never of what a process generated before: a farm segment
+//! (its own process, its own render list) whose frames follow a grid frame it does not
+//! render generates that grid frame first, and renders the frames a single run renders,
+//! bit for bit (test `stbpt_segments_render_the_frames_of_a_single_run`). The price: one
+//! frame in four is generated at the cap K with all strategies even where the measurement
+//! says otherwise (where reuse does not pay its landings are re-traces, i.e. fresh samples
+//! moved to its neighbours; where the path strategies win it costs a BDPT frame instead
+//! of a path frame); a segment may generate one grid frame before its own frames only to
+//! measure (at most the cap K + [`adapt::GRID`] − 1 frames before its first frame), and a
+//! clip's end grid frame lands in up to K frames past the end only to measure. Per frame,
+//! `reuse_decision` and `strategy_decision` say `grid` for a frame made as its grid frame
+//! chose (their statistics are of the frame's own window, which a segment may cut).
 //!
 //! What the counts leave out: the extra cost of a window query over a single-frame one
 //! (dynamic instances are answered per frame, so it grows with K on deforming meshes) is
@@ -206,18 +248,18 @@
 //! light tracing (its weights sum to one over the strategies it keeps, which all sample
 //! x1 from the camera: also with a moving camera).
 //!
-//! **The decision**, per generated frame, from counts and sample values of the frame's own
+//! **The decision**, per grid frame, from counts and sample values of the frame's own
 //! samples ([`strategies::decide`]): a sample made with all strategies also evaluates the
 //! value the path strategies give on the same camera subpath and the same light samples (s
 //! ≤ 1 contributions re-weighted by [`crate::bdpt::mis_weight`] among themselves: no ray),
 //! and counts the cost of both parts (closest-hit queries +
 //! [`strategies::SHADOW_QUERY_COST`] per shadow query, fitted to CPU time), at a quarter of
-//! the pixels ([`strategies::pilot_pixel`]: horizontal pairs, spread over the image). The
-//! first generated frame uses all strategies; one after every [`strategies::PROBE_EVERY`]
-//! frames with the path strategies is a **pilot frame**: all strategies and the
-//! measurements at those pixels, the path strategies elsewhere, so measuring again costs a
-//! quarter of a BDPT frame's extra work. (Starting with a pilot frame instead cost the demo
-//! up to 30 % at equal FLIP: its path samples spread caustic fireflies over the window.)
+//! the pixels ([`strategies::pilot_pixel`]: horizontal pairs, spread over the image), on
+//! the grid frames (above), which use all strategies everywhere: a **pilot frame** (all
+//! strategies and the measurements at those pixels, the path strategies elsewhere, a
+//! quarter of a BDPT frame's extra work) would be cheaper where the path strategies win,
+//! but cost the demo up to 30 % at equal FLIP (its path samples spread caustic fireflies
+//! over the window); grid frames are pilot frames only when `path_strategies` is set.
 //! Variances are of the luminance, relative (per pixel divided by the local mean², floored
 //! at 0.1 of the frame mean), per sample; BDPT's includes its light-tracing splats (Σ c² /
 //! spp per pixel). The path strategies' variance from their own few samples would miss
@@ -229,14 +271,11 @@
 //! terms between path lengths of one camera walk stay as sampled. BDPT's contributions from
 //! paths no path strategy can make (delta lights behind specular surfaces) count as
 //! `unreachable_share`: above [`strategies::UNREACHABLE_MAX`], BDPT is kept whatever the
-//! variances. The next frame uses the path strategies iff [`strategies::SWITCH_MARGIN`]
+//! variances. The frames after a grid frame use the path strategies iff [`strategies::SWITCH_MARGIN`]
 //! (1.5) × variance_path × cost_path < variance_bdpt × cost_bdpt, else all strategies (the
 //! margin because the few samples per pixel miss heavy tails: on the dolly the ratio
-//! reached 1.1 where all strategies were better); after [`strategies::PROBE_EVERY`] frames
-//! with the path strategies a pilot frame measures again, and after as many frames with
-//! all strategies and no measurements (the frames after a measuring frame that kept
-//! them: measuring cost 6–26 % of each such frame on the demo) a frame with all
-//! strategies measures again. The figures are in `run.json` per
+//! reached 1.1 where all strategies were better), for the frames up to the next grid
+//! frame (which measures again). The figures are in `run.json` per
 //! frame (`strategy_decision`, beside `reuse_decision`). The comparison is of the frame's
 //! own samples: it assumes a landing in another frame is worth the same share of a fresh
 //! sample with either strategy set, and it leaves the pilot's own work (the re-weighting
@@ -397,36 +436,20 @@ pub struct Stbpt {
     /// Mean number of frames served by the samples generated for each frame.
     served: BTreeMap<u32, f64>,
     last_output: Option<u32>,
-    /// K of the next generated frame (module doc, "Choosing K").
-    k_next: u32,
-    /// Consecutive generated frames at K = 0 ([`adapt::assess`]).
-    zero_run: u32,
+    /// Per grid frame ([`adapt::GRID`]), the K and the strategies its measurement chose
+    /// for the frames up to the next grid frame (module doc, "Choosing K").
+    grid: BTreeMap<u32, (u32, strategies::Mode)>,
     /// The self-assessment of each generated frame, until the frame is output.
     decisions: BTreeMap<u32, adapt::WindowDecision>,
-    /// How the next generated frame is made (module doc, "BDPT or the path strategies").
-    mode_next: strategies::Mode,
-    /// Consecutive generated frames with the path strategies ([`strategies::decide`]).
-    path_run: u32,
     /// The choice of strategies of each generated frame, until the frame is output.
     strategy_decisions: BTreeMap<u32, strategies::StrategyDecision>,
 }
 
 impl Stbpt {
     pub fn new(settings: StbptSettings) -> Self {
-        let k_next = settings.window.min((MAX_WINDOW_FRAMES as u32 - 1) / 2);
         Stbpt {
-            k_next,
-            zero_run: 0,
+            grid: BTreeMap::new(),
             decisions: BTreeMap::new(),
-            // All strategies first (measuring at the pilot pixels): a pilot frame's path
-            // samples would spread caustic fireflies over its window where BDPT wins
-            // (measured on the demo: 0.70–0.94× the CPU efficiency at FLIP ≤ 0.11).
-            mode_next: if settings.bdpt.path_strategies {
-                strategies::Mode::Path
-            } else {
-                strategies::Mode::Bdpt
-            },
-            path_run: 0,
             strategy_decisions: BTreeMap::new(),
             settings,
             film: None,
@@ -508,9 +531,8 @@ impl SequenceRenderer for Stbpt {
         self.last_output = Some(frame);
         while self.next < list.len() && list[self.next] <= frame.saturating_add(k) {
             let f = list[self.next];
-            // Every frame of f's window is still open: f > last output + k ≥ … + k_next.
-            let kf = self.k_next.min(k);
-            self.generate(source, f, kf, progress);
+            // Every frame of f's window is still open: f > last output + k ≥ … + K_f.
+            self.generate_next(source, f, progress);
             self.next += 1;
         }
         let p = self.pending.remove(&frame).unwrap_or_default();

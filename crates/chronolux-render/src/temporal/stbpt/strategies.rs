@@ -3,8 +3,8 @@
 //! only, no light subpath: [`BdptSettings::path_strategies`]). A frame generated with all
 //! strategies also evaluates, on the same camera subpaths and light samples, the estimate
 //! the path strategies would have given, and counts what each part cost; [`decide`]
-//! compares the two estimators' efficiency (1 / (variance × cost)) and chooses the
-//! strategies of the next generated frame. Counts and sample values only, never timings,
+//! compares the two estimators' efficiency (1 / (variance × cost)) and, on a grid frame
+//! ([`super::adapt::GRID`]), chooses the strategies of the frames up to the next. Counts and sample values only, never timings,
 //! so images stay bit-identical across thread counts and runs.
 //!
 //! [`BdptSettings::path_strategies`]: crate::bdpt::BdptSettings::path_strategies
@@ -22,12 +22,6 @@ use chronolux_core::color::Rgb;
 /// 3.91 against the measured 4.22, 2.63 and 3.71.
 pub const SHADOW_QUERY_COST: f64 = 3.9;
 
-/// Generated frames with the path strategies after which one pilot frame is generated to
-/// measure both again (the comparison needs the light subpaths); likewise, generated
-/// frames with all strategies but no measurements after which one measures again (the
-/// measurements cost 6–26 % of a frame on the demo, where BDPT stays the choice).
-pub const PROBE_EVERY: u32 = 4;
-
 /// In a pilot frame, one pixel pair in `PILOT_EVERY` uses all strategies ([`pilot_pixel`]).
 pub const PILOT_EVERY: u32 = 4;
 
@@ -41,13 +35,13 @@ pub enum Mode {
     /// All strategies (and the measurements) at the [`pilot_pixel`]s, the path
     /// strategies elsewhere: what the comparison needs at a quarter of its cost.
     Pilot,
-    /// All strategies, every sample, no measurements: the frames after one that measured
-    /// and chose BDPT, until the next measuring frame (`PROBE_EVERY`).
+    /// All strategies, every sample, no measurements: the frames after a grid frame that
+    /// chose BDPT, until the next grid frame ([`super::adapt::GRID`]).
     BdptQuiet,
 }
 
 impl Mode {
-    fn name(self) -> String {
+    pub(super) fn name(self) -> String {
         match self {
             Mode::Bdpt | Mode::BdptQuiet => "bdpt",
             Mode::Path => "path",
@@ -243,11 +237,10 @@ pub struct StrategyDecision {
     /// (all strategies at a quarter of the pixels, [`pilot_pixel`], the path strategies
     /// elsewhere).
     pub strategies: String,
-    /// Strategies of the next generated frame.
+    /// Strategies of the frames up to the next grid frame ([`super::adapt::GRID`]).
     pub next: String,
-    /// Why: `bdpt` / `path` (the comparison below chose them), `probe` (a pilot frame
-    /// after `PROBE_EVERY` frames with the path strategies, to measure again), `path`
-    /// kept between probes, `fixed` (no adaptation).
+    /// Why: `bdpt` / `path` (on a grid frame: the comparison below chose them), `grid`
+    /// (another frame: its grid frame's choice), `fixed` (no adaptation).
     pub decision: String,
     /// Relative variance per sample of the camera-part estimate plus light tracing, with
     /// all strategies (measured only on frames generated with them) and with the path
@@ -276,23 +269,15 @@ pub struct StrategyDecision {
     pub bdpt_over_path: Option<f64>,
 }
 
-/// Decides how the next generated frame is made from `pilot` (f's own samples, `spp` per
-/// pixel; `mode`: how f was made). `path_run` counts the consecutive generated frames with
-/// the path strategies (updated here). Without `adaptive` the mode stays (`fixed`).
+/// Decides how the frames after a grid frame are made from `pilot` (f's own samples,
+/// `spp` per pixel; `mode`: how f was made). Without `adaptive`, or after a frame without
+/// measurements, the mode stays (`fixed`, `grid`).
 ///
-/// Rule: after a frame with measurements (all strategies or pilot), the next uses the path
-/// strategies iff `SWITCH_MARGIN` × variance_path × cost_path < variance_bdpt × cost_bdpt
-/// and the share of light they cannot reach is at most `UNREACHABLE_MAX`, else all
-/// strategies without measurements. After a frame without measurements nothing can be
-/// compared: its strategies are kept, and after `PROBE_EVERY` such frames a pilot frame
-/// (path) or a measuring frame with all strategies (BDPT) measures again.
-pub fn decide(
-    pilot: &Pilot,
-    spp: u32,
-    mode: Mode,
-    adaptive: bool,
-    path_run: &mut u32,
-) -> (Mode, StrategyDecision) {
+/// Rule: after a frame with measurements (all strategies or pilot), the next frames use the
+/// path strategies iff `SWITCH_MARGIN` × variance_path × cost_path < variance_bdpt ×
+/// cost_bdpt and the share of light they cannot reach is at most `UNREACHABLE_MAX`, else
+/// all strategies without measurements.
+pub fn decide(pilot: &Pilot, spp: u32, mode: Mode, adaptive: bool) -> (Mode, StrategyDecision) {
     let (vb, vp, vs) = pilot.variances(spp);
     let measured = matches!(mode, Mode::Bdpt | Mode::Pilot) && pilot.samples > 0;
     let cost_path = if measured {
@@ -324,30 +309,13 @@ pub fn decide(
     }
     let (next, why) = if !adaptive {
         (mode, "fixed")
-    } else if mode == Mode::BdptQuiet {
-        // All strategies without measurements: kept until the next measuring frame.
-        *path_run += 1;
-        if *path_run >= PROBE_EVERY {
-            (Mode::Bdpt, "probe")
-        } else {
-            (Mode::BdptQuiet, "bdpt")
-        }
     } else if !measured {
-        *path_run += 1;
-        if *path_run >= PROBE_EVERY {
-            (Mode::Pilot, "probe")
-        } else {
-            (Mode::Path, "path")
-        }
+        (mode, "grid")
     } else if unreachable <= UNREACHABLE_MAX && SWITCH_MARGIN * vp * cost_path < vb * cost_bdpt {
         (Mode::Path, "path")
     } else {
         (Mode::BdptQuiet, "bdpt")
     };
-    // `path_run` counts the consecutive frames without measurements (path or quiet BDPT).
-    if matches!(next, Mode::Bdpt | Mode::Pilot) {
-        *path_run = 0;
-    }
     d.next = next.name();
     d.decision = why.to_string();
     (next, d)

@@ -32,7 +32,8 @@
 //! paths. The weights still sum to 1 for every path (all strategies derive their ratios
 //! from the same stored densities), so the estimator is unbiased either way; the change
 //! lowers the variance: the demo's HDR-FLIP at equal samples falls 5–11 % for `bdpt` and
-//! `stbpt` (BENCHMARKS.md, "Issue 17: densities through delta vertices").
+//! `stbpt`, and the default render's relMSE 2.9× (BENCHMARKS.md, "Issue 17: densities
+//! through delta vertices").
 //!
 //! The kernel is three public functions the spatio-temporal technique reuses:
 //! [`generate_camera_subpath`], [`generate_light_subpath`] and [`connect::connect`].

@@ -209,7 +209,8 @@ fn stbpt_bit_identical_across_thread_counts() {
 }
 
 /// Renders frames `0..frames` with stbpt (cap K, `spp` per frame, its defaults otherwise:
-/// adaptive) and returns each frame's report.
+/// adaptive) and returns each frame's report: a single run, i.e. the one segment that owns
+/// the whole clip.
 fn stbpt_frame_reports(
     desc: chronolux_core::scene::desc::SceneDesc,
     fps: f32,
@@ -217,18 +218,7 @@ fn stbpt_frame_reports(
     k: u32,
     spp: u32,
 ) -> Vec<RenderedFrame> {
-    let mut src = source(desc, W, H, fps, (0..frames).collect());
-    let mut r = Stbpt::new(StbptSettings {
-        bdpt: BdptSettings {
-            spp,
-            ..Default::default()
-        },
-        window: k,
-        ..Default::default()
-    });
-    (0..frames)
-        .map(|f| r.render_frame(&mut src, f, &|_| {}))
-        .collect()
+    stbpt_segment(&desc, fps, 0..frames, 0..frames, k, spp)
 }
 
 /// Renders frames `0..frames` with stbpt (cap K, `spp` per frame) and returns each frame's

@@ -2,8 +2,10 @@
 # Issue 17 goal 3, second run: the best of ours (stbpt + OIDN, window K = 2/4/8 at 1-2 spp)
 # against Mitsuba 3 and Cycles + OIDN on cornell-moving frames 0-7, 256x256, one run.
 set -u
-OUT=/work/peers-run/results-issue17b
-BIN=/work/peers-run/chronolux-oidn
+# OUT (results folder) and BIN (ours, built with --features oidn) can be given; the
+# defaults are this run's. The third run (../2026-12-02-peer-issue17c) sets both.
+OUT=${OUT:-/work/peers-run/results-issue17b}
+BIN=${BIN:-/work/peers-run/chronolux-oidn}
 # (unset for Blender: pyoidn's libur_loader breaks bpy's libsycl; the first Cycles call failed on it and was re-run with env -u at 09:55)
 export LD_LIBRARY_PATH=/work/ci-clone2/.venv-oidn/lib/python3.11/site-packages/pyoidn/oidn/lib
 { date -u; uptime; lscpu | grep -E "Model name|^CPU\(s\)|Flags" | cut -c1-400; grep -o -w 'avx512[a-z_]*' /proc/cpuinfo | sort -u | tr '\n' ' '; echo; } > $OUT/machine.txt

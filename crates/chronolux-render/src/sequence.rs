@@ -119,6 +119,9 @@ pub struct ReuseStats {
     pub reuse_factor: f64,
     /// Light subpaths whose splats this frame received, per pixel.
     pub light_subpaths_per_pixel: f64,
+    /// Pixels that no landing reached and that got samples of their own frame instead
+    /// (stbpt's interleaved generation).
+    pub filled: u64,
     /// The accumulation films so far: peak bytes in memory, disk-cache traffic and hit
     /// counts (cumulative over the frames rendered).
     pub film: crate::temporal::window_film::FilmStats,

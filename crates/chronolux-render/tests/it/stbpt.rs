@@ -19,7 +19,7 @@ use chronolux_render::integrator::{Integrator, RenderedFrame};
 use chronolux_render::sequence::{ReuseStats, SequenceRenderer};
 use chronolux_render::temporal::stbpt::adapt::{GRID, WindowDecision};
 use chronolux_render::temporal::stbpt::strategies::{SWITCH_MARGIN, StrategyDecision};
-use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings};
+use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings, generated_at};
 
 const W: u32 = 32;
 const H: u32 = 32;
@@ -218,7 +218,7 @@ fn stbpt_frame_reports(
     k: u32,
     spp: u32,
 ) -> Vec<RenderedFrame> {
-    stbpt_segment(&desc, fps, 0..frames, 0..frames, k, spp)
+    stbpt_segment(&desc, fps, 0..frames, 0..frames, k, spp, 1)
 }
 
 /// Renders frames `0..frames` with stbpt (cap K, `spp` per frame) and returns each frame's
@@ -309,6 +309,7 @@ fn stbpt_segment(
     owned: std::ops::Range<u32>,
     k: u32,
     spp: u32,
+    interleave: u32,
 ) -> Vec<RenderedFrame> {
     let compute = owned.start.saturating_sub(k).max(clip.start)..(owned.end + k).min(clip.end);
     let mut src = source(desc.clone(), W, H, fps, compute.collect());
@@ -318,6 +319,7 @@ fn stbpt_segment(
             ..Default::default()
         },
         window: k,
+        interleave,
         ..Default::default()
     });
     owned
@@ -331,17 +333,20 @@ fn stbpt_segment(
 /// where the strategies switch to the path strategies after each grid frame, and the
 /// moving emitter, where K drops to 0 after each; a clip of 11 frames at cap K = 2 cut into
 /// three segments, the middle one starting after a grid frame and between two.
+/// With interleaved generation too (module doc, "Interleaved generation"), where the frames
+/// at K = 0 leave pixels to the fill.
 /// Checked: with each process deciding from the frames it generated itself (the choice
 /// carried from one generated frame to the next) the middle segment's frames differ.
 #[test]
 fn stbpt_segments_render_the_frames_of_a_single_run() {
     let (k, spp) = (2u32, 1u32);
     let clip = 0..11u32;
-    for (what, desc, fps) in [
-        ("cornell box", stage::cornell_box(), 24.0f32),
-        ("moving emitter", moving_emitter(), 3.0),
+    for (what, desc, fps, il) in [
+        ("cornell box", stage::cornell_box(), 24.0f32, 1u32),
+        ("moving emitter", moving_emitter(), 3.0, 1),
+        ("moving emitter, interleaved", moving_emitter(), 3.0, 2),
     ] {
-        let single = stbpt_segment(&desc, fps, clip.clone(), clip.clone(), k, spp);
+        let single = stbpt_segment(&desc, fps, clip.clone(), clip.clone(), k, spp, il);
         // The decisions did change within the clip (else the test would show nothing).
         let changed = single.iter().any(|img| {
             let d: WindowDecision =
@@ -358,7 +363,7 @@ fn stbpt_segments_render_the_frames_of_a_single_run() {
                 .collect()
         };
         for seg in [0..3u32, 3..7, 7..11] {
-            let frames = stbpt_segment(&desc, fps, clip.clone(), seg.clone(), k, spp);
+            let frames = stbpt_segment(&desc, fps, clip.clone(), seg.clone(), k, spp, il);
             for (f, img) in seg.zip(&frames) {
                 assert!(
                     bits(img) == bits(&single[f as usize]),
@@ -571,4 +576,80 @@ fn stbpt_agrees_with_bdpt_under_a_moving_camera() {
     let reference = bdpt_reference(dolly.clone(), fps, out, 256);
     let imgs = stbpt_runs(&dolly, fps, out, k, spp, false, 0..runs);
     assert_agree(&imgs, &reference, "moving camera, all strategies");
+}
+
+/// Interleaved generation's pattern ([`generated_at`]): for every n, any n consecutive
+/// frames generate every pixel exactly once, each frame a share 1 / n of every 8×4 block
+/// (the Bayer matrix over pixel pairs repeats every 8 × 4 pixels).
+#[test]
+fn interleaved_frames_generate_every_pixel_once() {
+    for n in [1u32, 2, 4, 8, 16] {
+        for start in [0u32, 3, 8] {
+            for y in 0..8 {
+                for x in 0..16 {
+                    let times = (start..start + n)
+                        .filter(|&f| generated_at(x, y, f, n))
+                        .count();
+                    assert_eq!(times, 1, "n {n}, frames {start}.., pixel ({x}, {y})");
+                }
+            }
+            for f in start..start + n {
+                for (bx, by) in [(0u32, 0u32), (8, 4)] {
+                    let c = (by..by + 4)
+                        .flat_map(|y| (bx..bx + 8).map(move |x| (x, y)))
+                        .filter(|&(x, y)| generated_at(x, y, f, n))
+                        .count();
+                    assert_eq!(c as u32, 32 / n, "n {n}, frame {f}, block ({bx}, {by})");
+                }
+            }
+        }
+    }
+}
+
+/// Interleaved generation (module doc, "Interleaved generation") is unbiased: frame 0 of
+/// the moving demo and of the dolly (moving camera, without caustics as in
+/// [`stbpt_agrees_with_bdpt_under_a_moving_camera`]), each frame generating samples at
+/// half or a quarter of the pixels, against the frame's own BDPT image (the test and
+/// tolerance of [`stbpt_frame_agrees_with_its_own_reference_on_a_moving_animation`]).
+/// At K = 0 a frame's own samples cover only its share of the pixels: the fill gives the
+/// others their samples (exactly 1 − 1 / n of them), and the image agrees too.
+#[test]
+fn stbpt_interleaved_generation_agrees_with_bdpt() {
+    let (spp, runs, fps) = (2u32, 12u64, 3.0f32);
+    for (what, desc, k, il) in [
+        ("moving demo, interleave 2", stage::demo(), 2u32, 2u32),
+        ("moving demo, interleave 4, K = 0", stage::demo(), 0, 4),
+        (
+            "moving camera, interleave 2",
+            without_caustics(stage::dolly()),
+            2,
+            2,
+        ),
+    ] {
+        let reference = bdpt_reference(desc.clone(), fps, 0, 256);
+        let mut imgs = Vec::new();
+        for seed in 0..runs {
+            let settings = StbptSettings {
+                bdpt: BdptSettings {
+                    spp,
+                    seed,
+                    ..Default::default()
+                },
+                window: k,
+                adaptive: false,
+                interleave: il,
+                ..Default::default()
+            };
+            let (img, reuse) = stbpt_frame_with(desc.clone(), fps, k + 1, 0, settings);
+            assert_eq!(img.invalid_samples, 0);
+            if k == 0 {
+                assert_eq!(reuse.filled, u64::from(W * H - W * H / il), "{what}");
+            }
+            if seed == 0 {
+                eprintln!("{what}: {reuse:?}");
+            }
+            imgs.push(img);
+        }
+        assert_agree(&imgs, &reference, what);
+    }
 }

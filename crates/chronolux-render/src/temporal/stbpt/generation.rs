@@ -1025,6 +1025,9 @@ impl Stbpt {
         };
         let measured_at =
             |x: u32, y: u32| matches!(mode, Mode::Bdpt | Mode::Pilot) && pilot_pixel(x, y);
+        // The pixels that generate samples in f (all but with `interleave`).
+        let interleave = self.settings.interleave;
+        let gen_at = |x: u32, y: u32| super::generated_at(x, y, f, interleave);
         let cam = &scenes[jf].camera;
         let (w, h) = (cam.width, cam.height);
         let film = self.film.as_mut().expect("opened");
@@ -1037,14 +1040,20 @@ impl Stbpt {
         let spp = self.settings.bdpt.spp;
         let mut counts = Counts::new(n);
         let mut pilot = Pilot::new(w, h);
+        let generating = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| gen_at(x, y))
+            .count();
+        // Shares of all of f's pixels (not of the generating ones): they normalise
+        // per-pixel sums of light subpaths over the whole image.
         let with_all = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .filter(|&(x, y)| all_at(x, y))
+            .filter(|&(x, y)| gen_at(x, y) && all_at(x, y))
             .count();
         let rho = with_all as f64 / (w as f64 * h as f64).max(1.0);
         let measured = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .filter(|&(x, y)| measured_at(x, y))
+            .filter(|&(x, y)| gen_at(x, y) && measured_at(x, y))
             .count();
         let rho_measured = measured as f64 / (w as f64 * h as f64).max(1.0);
         for (s, first) in
@@ -1074,7 +1083,7 @@ impl Stbpt {
                 };
                 let mut sc = Scratch::default();
                 for y in y0..y0 + th {
-                    for x in x0..x0 + tw {
+                    for x in (x0..x0 + tw).filter(|&x| gen_at(x, y)) {
                         let g = if measured_at(x, y) {
                             &gen_all
                         } else if all_at(x, y) {
@@ -1141,7 +1150,7 @@ impl Stbpt {
             }
             p.served_by_light += rho;
         }
-        let generated = (w as u64 * h as u64 * spp as u64).max(1);
+        let generated = (generating as u64 * spp as u64).max(1);
         let (next, mut strategy) = strategies::decide(&pilot, spp, mode, adaptive);
         self.served.insert(
             f,

@@ -295,6 +295,35 @@
 //!
 //! [`BdptSettings::path_strategies`]: crate::bdpt::BdptSettings::path_strategies
 //!
+//! # Interleaved generation (`interleave` = n > 1)
+//!
+//! Each frame generates its `spp` samples per pixel at one pixel in n
+//! ([`generated_at`]: a 4×4 Bayer matrix over horizontal pixel pairs, frame f taking the
+//! (f mod n)-th of n rank ranges, so any n consecutive frames generate every pixel once),
+//! and the window's landings serve the other pixels. It is the effort below one sample
+//! per pixel and frame, and at equal generated samples it stratifies better: the `spp`
+//! samples a frame lands in a pixel are consecutive points of one pixel's Sobol sequence,
+//! where without it each frame lands its own sequence's first points (measured in
+//! BENCHMARKS.md, "Issue 17: interleaved generation").
+//!
+//! **Bias.** Each landing estimates the radiance at the raster position it landed at,
+//! as above. Where nothing moves, a pixel's landings are the samples of the frames that
+//! generate it, uniform over the pixel. Where the scene or the camera moves, the landings
+//! in g's pixel are those of f's generating pixels moved into it: the landing density is
+//! f's lattice of generating pixels moved, uneven within the pixel, so the pixel mean
+//! weighs parts of the pixel unevenly. That is a change of pixel filter, an error of at
+//! most the radiance variation within the pixel (first order in the pixel size, where the
+//! smooth density of the full generation leaves a second-order one); 8×8 block tests do
+//! not resolve it (`stbpt_interleaved_generation_agrees_with_bdpt`).
+//!
+//! **Fill.** A pixel no landing reached (K = 0, a disocclusion, landings dropped by the
+//! coverage test under a moving camera) gets `spp` samples of its own frame with the path
+//! strategies (`Stbpt::fill`, a stream keyed by (seed, frame, pixel), the count in
+//! `reuse.filled` in `run.json`): the pixel's value is then a mean of unbiased estimates
+//! whether or not landings reached it. Those samples estimate all of the pixel's light, so
+//! the light-tracing splats weigh 0 there ("Samples of both kinds"). With motion blur a
+//! filled pixel has no trajectory and is spread as a still one.
+//!
 //! # Memory
 //!
 //! Samples are not stored: each is made, landed in every frame of its window and
@@ -307,14 +336,19 @@
 //! Orthographic cameras: samples serve only their own frame (the landing test needs a
 //! pinhole). The window holds at most [`MAX_WINDOW_FRAMES`] frames (K ≤ 31).
 
-use crate::bdpt::BdptSettings;
+use crate::bdpt::{Bdpt, BdptSettings};
 use crate::integrator::RenderedFrame;
+use crate::integrator::SplattingEstimator;
 use crate::sequence::{ReuseStats, SequenceRenderer};
 use crate::temporal::window_film::{FilmStats, WindowFilm};
 use chronolux_core::accel::multi_frame::MAX_WINDOW_FRAMES;
 #[cfg(doc)]
 use chronolux_core::accel::multi_frame::MultiFrameAccel;
 use chronolux_core::color::Rgb;
+use chronolux_core::math::Vec2;
+use chronolux_core::parallel;
+use chronolux_core::sampling::sampler::PixelSampler;
+use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
 use chronolux_core::stats::Stats;
 use motion::splat_pixel_trajectories;
@@ -358,6 +392,48 @@ pub struct StbptSettings {
     /// beyond it go to a disk cache ([`WindowFilm::with_budget`]). Default 512.
     #[serde(default = "default_film_budget")]
     pub film_budget_mb: u64,
+    /// Generated samples at part of the pixels (module doc, "Interleaved generation"):
+    /// each frame generates its `spp` samples per pixel at one pixel in `interleave` (1,
+    /// 2, 4, 8 or 16), the pattern shifting from frame to frame ([`generated_at`]) so that
+    /// any `interleave` consecutive frames generate every pixel once; the window's landings
+    /// serve the others. The effort below 1 sample per pixel and frame. Default 1.
+    #[serde(default = "interleave_default", deserialize_with = "interleave_de")]
+    pub interleave: u32,
+}
+
+fn interleave_default() -> u32 {
+    1
+}
+
+fn interleave_de<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u32, D::Error> {
+    let v = <u32 as serde::Deserialize>::deserialize(d)?;
+    if matches!(v, 1 | 2 | 4 | 8 | 16) {
+        Ok(v)
+    } else {
+        Err(serde::de::Error::custom(format!(
+            "interleave must be 1, 2, 4, 8 or 16 (one pixel in that many generates samples \
+             per frame), not {v}"
+        )))
+    }
+}
+
+/// 4×4 Bayer matrix: its values below 16 / n, for n a power of two, form a regular
+/// lattice of density 1 / n, and so do those in any of the n equal ranks.
+const BAYER4: [u8; 16] = [0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5];
+
+/// Whether frame `f` generates samples at pixel (x, y) with [`StbptSettings::interleave`]
+/// = `n`: pixel (x, y)'s rank in a 4×4 Bayer matrix over horizontal pixel pairs (x / 2,
+/// y), of which frame f takes the (f mod n)-th of n equal rank ranges. Any n consecutive
+/// frames generate every pixel once, each frame on a regular lattice of density 1 / n.
+/// Pairs stay together so that the pilot's pair partners ([`strategies::pilot_pixel`])
+/// are generated with each other; the grid frames (f a multiple of [`adapt::GRID`]) take
+/// the lowest ranks, which for n ≤ 2 contain every pilot pair.
+pub fn generated_at(x: u32, y: u32, f: u32, n: u32) -> bool {
+    if n <= 1 {
+        return true;
+    }
+    let r = BAYER4[((y & 3) * 4 + ((x >> 1) & 3)) as usize] as u32;
+    r * n / 16 == f % n
 }
 
 fn default_film_budget() -> u64 {
@@ -386,6 +462,7 @@ impl Default for StbptSettings {
             adaptive: true,
             shutter: 0.0,
             film_budget_mb: default_film_budget(),
+            interleave: 1,
         }
     }
 }
@@ -506,6 +583,90 @@ impl Stbpt {
     }
 }
 
+/// What [`Stbpt::fill`] did.
+struct Filled {
+    /// The pixels filled.
+    pixels: Vec<u32>,
+    invalid: u64,
+    stats: Stats,
+}
+
+/// Salt of the fill samples' stream (module doc, "Interleaved generation").
+const FILL_STREAM: u64 = 0x1656_67b1_9e37_79f9;
+
+impl Stbpt {
+    /// Gives every pixel of `frame` that no landing reached (`weights` 0) `spp` samples of
+    /// its own frame with the path strategies, from a stream of its own keyed by (seed,
+    /// frame, pixel): their mean, weight and squares are written in place of the empty
+    /// pixel's. Only with `interleave` > 1 can a pixel stay empty (otherwise its own
+    /// sample lands in it).
+    fn fill(
+        &self,
+        scene: &FrameScene,
+        frame: u32,
+        means: &mut [Rgb],
+        weights: &mut [f32],
+        squares: &mut [Rgb],
+    ) -> Filled {
+        let w = scene.camera.width;
+        let empty: Vec<u32> = (0..weights.len() as u32)
+            .filter(|&i| weights[i as usize] <= 0.0)
+            .collect();
+        let spp = self.settings.bdpt.spp.max(1);
+        let bdpt = Bdpt::new(BdptSettings {
+            light_tracing: false,
+            path_strategies: true,
+            ..self.settings.bdpt.clone()
+        });
+        let seed = self.settings.bdpt.seed ^ FILL_STREAM;
+        let chunks = parallel::map_chunks(empty.len(), 64, |range| {
+            let mut stats = Stats::default();
+            let mut invalid = 0u64;
+            let mut splats = Vec::new();
+            let values: Vec<(Rgb, Rgb)> = empty[range]
+                .iter()
+                .map(|&i| {
+                    let (x, y) = (i % w, i / w);
+                    let mut sampler = PixelSampler::new(seed, frame, x, y);
+                    let (mut sum, mut sq) = (Rgb::ZERO, Rgb::ZERO);
+                    for s in 0..spp {
+                        sampler.start_sample(s);
+                        let raster = Vec2::new(x as f32, y as f32) + sampler.next_2d();
+                        let v = bdpt.sample(scene, raster, &mut sampler, &mut stats, &mut splats);
+                        stats.samples += 1;
+                        if v.is_finite() {
+                            sum += v;
+                            sq += v * v;
+                        } else {
+                            invalid += 1;
+                        }
+                    }
+                    (sum / spp as f32, sq / spp as f32)
+                })
+                .collect();
+            (values, stats, invalid)
+        });
+        let mut out = Filled {
+            pixels: Vec::new(),
+            invalid: 0,
+            stats: Stats::default(),
+        };
+        let mut values = chunks.iter().flat_map(|c| &c.0);
+        for &i in &empty {
+            let &(m, sq) = values.next().expect("one value per empty pixel");
+            means[i as usize] = m;
+            weights[i as usize] = spp as f32;
+            squares[i as usize] = sq;
+        }
+        for c in &chunks {
+            out.stats += c.1;
+            out.invalid += c.2;
+        }
+        out.pixels = empty;
+        out
+    }
+}
+
 impl SequenceRenderer for Stbpt {
     fn name(&self) -> &'static str {
         "stbpt"
@@ -541,8 +702,15 @@ impl SequenceRenderer for Stbpt {
         let scene = source.frame(frame);
         let (w, h) = (scene.camera.width, scene.camera.height);
         self.open_films(w, h);
-        let (mut means, weights) = self.film.as_mut().expect("opened").finish(frame, 0.0);
-        let (squares, _) = self.film_sq.as_mut().expect("opened").finish(frame, 0.0);
+        let (mut means, mut weights) = self.film.as_mut().expect("opened").finish(frame, 0.0);
+        let (mut squares, _) = self.film_sq.as_mut().expect("opened").finish(frame, 0.0);
+        // Pixels no landing reached (only with `interleave`: module doc, "Interleaved
+        // generation") get samples of their own frame.
+        let mut stats = p.stats;
+        let mut invalid = p.invalid;
+        let filled = self.fill(&scene, frame, &mut means, &mut weights, &mut squares);
+        stats += filled.stats;
+        invalid += filled.invalid;
         // The splats are the light-tracing share of the frames with light tracing: mean
         // over their light subpaths, weighted per pixel by their landings' share (module
         // doc, "BDPT or the path strategies"); all of the pixel when every frame had it.
@@ -557,21 +725,40 @@ impl SequenceRenderer for Stbpt {
             .as_mut()
             .expect("opened")
             .finish(frame, splat_scale);
-        if lt > 0.0 && lt != window as f64 {
-            for ((s, &nb), &n) in splats.iter_mut().zip(&lt_landed).zip(&weights) {
-                *s *= if n > 0.0 {
-                    nb / n
-                } else {
-                    (lt / window as f64) as f32
-                };
+        if lt > 0.0 && self.settings.adaptive {
+            // The splat film's weights count the landings with light tracing (adaptive
+            // runs only: the frames may differ in strategies); the fill's samples have none.
+            if lt != window as f64 || !filled.pixels.is_empty() {
+                for ((s, &nb), &n) in splats.iter_mut().zip(&lt_landed).zip(&weights) {
+                    *s *= if n > 0.0 {
+                        nb / n
+                    } else {
+                        (lt / window as f64) as f32
+                    };
+                }
+            }
+        } else if lt > 0.0 {
+            // Every landing had light tracing but the fill's samples (path strategies), which
+            // estimate all of their pixel's light.
+            for &i in &filled.pixels {
+                splats[i as usize] = Rgb::ZERO;
             }
         }
         if self.settings.shutter > 0.0 {
-            let blur: Vec<Vec<Rgb>> = self
+            let mut blur: Vec<Vec<Rgb>> = self
                 .film_blur
                 .iter_mut()
                 .map(|f| f.finish(frame, 0.0).0)
                 .collect();
+            // A filled pixel has no trajectory: it is spread as a still one (offsets 0, its
+            // value at both ends).
+            for &i in &filled.pixels {
+                let i = i as usize;
+                blur[0][i] = Rgb::ZERO;
+                blur[1][i] = Rgb::ZERO;
+                blur[2][i] = means[i];
+                blur[3][i] = means[i];
+            }
             means = splat_pixel_trajectories(&means, &weights, &blur, w, h, self.settings.shutter);
         }
         // Variance of the mean of the landed samples, (E[v²] − E[v]²)/(n − 1); the splats'
@@ -598,6 +785,7 @@ impl SequenceRenderer for Stbpt {
             retraced: p.retraced,
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
             light_subpaths_per_pixel: spp as f64 * p.served_by_light,
+            filled: filled.pixels.len() as u64,
             film: self.film_stats(),
         };
         self.served.retain(|&f, _| f + k >= frame);
@@ -626,8 +814,8 @@ impl SequenceRenderer for Stbpt {
             height: h,
             pixels,
             variance,
-            stats: p.stats,
-            invalid_samples: p.invalid,
+            stats,
+            invalid_samples: invalid,
             report,
             // The reused subpaths are not split into direct and indirect light.
             light: None,

@@ -19,7 +19,7 @@ use chronolux_render::integrator::{Integrator, RenderedFrame};
 use chronolux_render::sequence::{ReuseStats, SequenceRenderer};
 use chronolux_render::temporal::stbpt::adapt::{GRID, WindowDecision};
 use chronolux_render::temporal::stbpt::strategies::{SWITCH_MARGIN, StrategyDecision};
-use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings, generated_at};
+use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings, generated_at, stream_index};
 
 const W: u32 = 32;
 const H: u32 = 32;
@@ -651,5 +651,35 @@ fn stbpt_interleaved_generation_agrees_with_bdpt() {
             imgs.push(img);
         }
         assert_agree(&imgs, &reference, what);
+    }
+}
+
+/// Sample streams across frames ([`stream_index`]): the frames generating a pixel take
+/// consecutive runs of `spp` points of one sequence per block, never a point twice and never
+/// a strided subsequence (whose Sobol points would share their leading digits), and no
+/// point beyond the sequence's 2^16 Sobol points.
+#[test]
+fn frames_take_consecutive_points_of_one_sequence() {
+    for n in [1u32, 2, 8] {
+        for spp in [1u32, 4, 100] {
+            let mut seen = std::collections::BTreeSet::new();
+            let (mut last_block, mut next) = (0u32, 0u32);
+            for f in (0..3000u32).filter(|&f| generated_at(0, 0, f, n)) {
+                for i in 0..spp {
+                    let (block, idx) = stream_index(f, n, spp, i);
+                    assert!(
+                        seen.insert((block, idx)),
+                        "n {n}, spp {spp}: frame {f} repeats"
+                    );
+                    if block != last_block {
+                        assert_eq!((block, idx), (last_block + 1, 0), "n {n}, spp {spp}, f {f}");
+                        (last_block, next) = (block, 0);
+                    }
+                    assert_eq!(idx, next, "n {n}, spp {spp}: frame {f} sample {i}");
+                    assert!(idx < 1 << 16);
+                    next += 1;
+                }
+            }
+        }
     }
 }

@@ -23,7 +23,7 @@ use chronolux_core::color::Rgb;
 use chronolux_core::geometry::Ray;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
-use chronolux_core::sampling::sampler::PixelSampler;
+use chronolux_core::sampling::sampler::{PixelSampler, SOBOL_MAX_SAMPLES};
 use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
@@ -187,6 +187,8 @@ pub(super) struct Scratch {
 /// Read-only state of one generated frame.
 pub(super) struct Generation<'a> {
     pub(super) bdpt: &'a BdptSettings,
+    /// [`StbptSettings::interleave`](super::StbptSettings::interleave).
+    pub(super) interleave: u32,
     pub(super) frames: &'a [u32],
     pub(super) scenes: &'a [Arc<FrameScene>],
     pub(super) jf: usize,
@@ -215,6 +217,21 @@ pub(super) struct Generation<'a> {
     /// Per window frame, which of its pixels take landings from f
     /// ([`Generation::coverage`]; empty while it is computed: all).
     pub(super) coverage: &'a [super::landing::Coverage],
+}
+
+/// Most frames whose samples at a pixel share one sequence (module doc, "Sample streams").
+const STREAM_BLOCK: u32 = 1024;
+
+/// The stream of sample `index` of frame `f` at a pixel (module doc, "Sample streams"):
+/// the block key (passed as the sampler's frame) and the sample's index in the block's
+/// sequence. Frame f is the (f / n)-th frame generating the pixel (`n`: the interleave),
+/// so the frames generating a pixel take consecutive runs of `spp` indices: never a
+/// strided subsequence, whose Sobol points would share their leading digits.
+pub fn stream_index(f: u32, n: u32, spp: u32, index: u32) -> (u32, u32) {
+    // At most STREAM_BLOCK frames, and no more than the Sobol points there are.
+    let len = (SOBOL_MAX_SAMPLES / spp.max(1)).clamp(1, STREAM_BLOCK);
+    let round = f / n.max(1);
+    (round / len, (round % len) * spp + index)
 }
 
 /// A sample landed in window frame `j` at `raster` with `value` (buffered until the
@@ -550,12 +567,15 @@ impl Generation<'_> {
         let n = self.scenes.len();
         let scene_f = &self.scenes[jf];
         let all = self.mfa.all_frames();
-        let mut cs = PixelSampler::new(seed, f, px, py);
-        cs.start_sample(index);
-        let mut ls = PixelSampler::new(seed ^ LIGHT_STREAM, f, px, py);
-        ls.start_sample(index);
-        let mut ns = PixelSampler::new(seed ^ CONNECTION_STREAM, f, px, py);
-        ns.start_sample(index);
+        // One sequence per pixel for the frames of a block (module doc, "Sample streams"):
+        // the samples the frames of a window land in a pixel are stratified together.
+        let (block, idx) = stream_index(f, self.interleave, self.bdpt.spp, index);
+        let mut cs = PixelSampler::new(seed, block, px, py);
+        cs.start_sample(idx);
+        let mut ls = PixelSampler::new(seed ^ LIGHT_STREAM, block, px, py);
+        ls.start_sample(idx);
+        let mut ns = PixelSampler::new(seed ^ CONNECTION_STREAM, block, px, py);
+        ns.start_sample(idx);
         let raster = Vec2::new(px as f32, py as f32) + cs.next_2d();
         let cs0 = cs.clone();
         let ls0 = ls.clone();
@@ -983,6 +1003,7 @@ impl Stbpt {
         let gen_all = Generation {
             same_camera,
             bdpt: &bdpt,
+            interleave: self.settings.interleave,
             frames: &frames,
             scenes: &scenes,
             jf,

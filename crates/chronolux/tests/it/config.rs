@@ -143,6 +143,10 @@ fn bad_settings_are_one_line_errors_naming_the_keys() {
         &render(&["--method", "stbpt", "--set", "window=two"]),
         &["window", "two"],
     );
+    fails(
+        &render(&["--method", "stbpt", "--set", "interleave=3"]),
+        &["interleave must be 1, 2, 4, 8 or 16", "not 3"],
+    );
     fails(&render(&["--set", "window"]), &["key=value"]);
     fails(
         &render(&["--method", "path", "--window", "2"]),

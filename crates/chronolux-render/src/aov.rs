@@ -38,8 +38,11 @@ use chronolux_core::parallel;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::frame::FrameScene;
 
-/// Camera samples per pixel of the passes.
-pub const AOV_SPP: u32 = 8;
+/// Camera samples per pixel of the passes. Four: for the denoiser (stbpt + OIDN on
+/// cornell-moving, 256², 1–4 spp) 8 samples cost 2–12 % more CPU than 4 for 0.2–0.4 %
+/// lower HDR-FLIP, and 2 lose 1.5–2 % of FLIP (BENCHMARKS.md, "Issue 17: the denoiser's
+/// passes").
+pub const AOV_SPP: u32 = 4;
 /// Depth written where a ray escapes.
 pub const DEPTH_MISS: f32 = 1e10;
 /// Seed salt separating the passes' sample streams from the beauty's.

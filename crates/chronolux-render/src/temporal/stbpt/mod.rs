@@ -407,7 +407,10 @@ pub struct StbptSettings {
     /// each frame generates its `spp` samples per pixel at one pixel in `interleave` (1,
     /// 2, 4, 8 or 16), the pattern shifting from frame to frame ([`generated_at`]) so that
     /// any `interleave` consecutive frames generate every pixel once; the window's landings
-    /// serve the others. The effort below 1 sample per pixel and frame. Default 1.
+    /// serve the others. The effort below 1 sample per pixel and frame. Keep it at most
+    /// the 2K + 1 frames of a window and the clip's length: a pixel that no frame of its
+    /// window generates is filled in every frame (`reuse.filled` in `run.json`), which
+    /// costs what frame-by-frame path tracing would there. Default 1.
     #[serde(default = "interleave_default", deserialize_with = "interleave_de")]
     pub interleave: u32,
 }

@@ -93,9 +93,18 @@ fn passes_do_not_depend_on_the_thread_count_and_see_albedo_on_the_demo() {
     assert_eq!(a.normal, b.normal);
     assert_eq!(a.depth, b.depth);
     assert_eq!(a.motion_prev, b.motion_prev);
-    // Inside the closed Cornell room every ray hits; albedos are reflectances in [0, 1]
-    // and normals unit (up to the antialiasing average at edges, ≤ 1).
-    assert!(a.depth.iter().all(|d| *d < DEPTH_MISS));
+    // The room fills the image but for its front edge, which shows the black background
+    // on the image border (the black frame of the demo's images): every pixel inside the
+    // border sees the room (some of a border pixel's samples may all miss). Albedos are
+    // reflectances in [0, 1] and normals unit (up to the antialiasing average at edges, ≤ 1).
+    for y in 1..31 {
+        for x in 1..31 {
+            assert!(
+                a.depth[y * 32 + x] < DEPTH_MISS,
+                "pixel ({x}, {y}) sees no surface"
+            );
+        }
+    }
     for (al, nm) in a.albedo.iter().zip(&a.normal) {
         assert!((0.0..=1.0).contains(&al.x) && (0.0..=1.0).contains(&al.y));
         assert!(nm.length() <= 1.0 + 1e-4);

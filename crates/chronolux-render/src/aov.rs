@@ -32,7 +32,6 @@
 
 use crate::integrator::tile_rect;
 use chronolux_core::color::Rgb;
-use chronolux_core::material::bsdf_at;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::sampler::PixelSampler;
@@ -273,8 +272,7 @@ fn pixel(
                 continue;
             };
             let si = scene.interaction(&hit, &ray);
-            let mat = &scene.materials[si.material as usize];
-            let bsdf = bsdf_at(mat, &scene.textures, &si.shading);
+            let bsdf = scene.bsdf(&si);
             albedo += albedo_of(&bsdf);
             let n = bsdf.frame.n;
             normal += if n.dot(ray.d) > 0.0 { -n } else { n };

@@ -6,7 +6,6 @@ use crate::kernels::direct::{NeeWeight, next_event};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
 use chronolux_core::geometry::{Ray, spawn_ray};
-use chronolux_core::material;
 use chronolux_core::math::Vec3;
 use chronolux_core::sampling::power_heuristic;
 use chronolux_core::sampling::sampler::PixelSampler;
@@ -136,8 +135,7 @@ impl PathTracer {
                 break;
             }
 
-            let mat = &scene.materials[si.material as usize];
-            let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
+            let bsdf = scene.bsdf(&si);
 
             // Next-event estimation. Three dimensions are consumed whether or not they are
             // used, so each bounce's dimensions stay aligned across samples.

@@ -145,6 +145,16 @@ impl FrameScene {
         si
     }
 
+    /// The BSDF of the surface at `si`: its material with this scene's textures at its
+    /// shading point.
+    pub fn bsdf(&self, si: &SurfaceInteraction) -> crate::bsdf::Bsdf {
+        material::bsdf_at(
+            &self.materials[si.material as usize],
+            &self.textures,
+            &si.shading,
+        )
+    }
+
     /// Surface data at barycentrics (b1, b2) of a triangle of an instance.
     pub fn surface_at(
         &self,

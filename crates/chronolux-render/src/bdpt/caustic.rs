@@ -94,7 +94,6 @@ use crate::pmic::photon_map::{Lookup, MapFilter, PhotonMap, StoredPhoton};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::spawn_ray;
-use chronolux_core::material;
 use chronolux_core::math::Vec2;
 use chronolux_core::parallel;
 use chronolux_core::sampling::sampler::PixelSampler;
@@ -188,11 +187,7 @@ fn eye_walk(
         };
         let si = scene.interaction(&hit, &ray);
         let wo = -ray.d.normalize();
-        let bsdf = material::bsdf_at(
-            &scene.materials[si.material as usize],
-            &scene.textures,
-            &si.shading,
-        );
+        let bsdf = scene.bsdf(&si);
         if bounces >= 1 && bsdf.has_non_delta() {
             let n = if si.ng.dot(wo) >= 0.0 { si.ng } else { -si.ng };
             l += beta * map.radiance(si.p, n, wo, &bsdf, &LOOKUP, r_max);

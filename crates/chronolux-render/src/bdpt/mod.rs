@@ -52,7 +52,6 @@ use chronolux_core::accel::Hit;
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
 use chronolux_core::geometry::{Ray, spawn_ray};
-use chronolux_core::material;
 use chronolux_core::math::Vec2;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::desc::Projection;
@@ -203,11 +202,7 @@ fn random_walk<T: FnMut(&Ray) -> Option<Hit>>(
         };
         let si = scene.interaction(&hit, &ray);
         let wo = -ray.d.normalize();
-        let bsdf = material::bsdf_at(
-            &scene.materials[si.material as usize],
-            &scene.textures,
-            &si.shading,
-        );
+        let bsdf = scene.bsdf(&si);
         let mut v = Vertex::surface(si, bsdf, wo, beta);
         v.pdf_fwd = prev.convert_density(pdf_fwd, &v);
         path.push(v);

@@ -36,7 +36,6 @@ use chronolux_core::bsdf::microfacet::MIN_ALPHA;
 use chronolux_core::bsdf::{Bsdf, TransportMode};
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::{Ray, spawn_ray};
-use chronolux_core::material;
 use chronolux_core::math::Vec3;
 use chronolux_core::sampling::power_heuristic;
 use chronolux_core::sampling::sampler::PixelSampler;
@@ -144,8 +143,7 @@ impl DeptView<'_> {
                 };
                 l[slot(scattered, specular_bounce)] += beta * le * w;
             }
-            let mat = &scene.materials[si.material as usize];
-            let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
+            let bsdf = scene.bsdf(&si);
             let u_light = sampler.next_1d();
             let u_lp = sampler.next_2d();
             let u_lobe = sampler.next_1d();

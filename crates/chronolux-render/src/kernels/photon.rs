@@ -53,7 +53,6 @@ use chronolux_core::accel::TriRef;
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
 use chronolux_core::geometry::{Ray, spawn_ray};
-use chronolux_core::material;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::qmc::halton;
@@ -255,8 +254,7 @@ fn walk(
         };
         let si = scene.interaction(&hit, &ray);
         let wo = -ray.d.normalize();
-        let mat = &scene.materials[si.material as usize];
-        let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
+        let bsdf = scene.bsdf(&si);
         let deposited = bsdf.has_non_delta();
         if deposited {
             stats.hits += 1;

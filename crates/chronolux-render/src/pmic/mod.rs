@@ -84,7 +84,6 @@ use crate::kernels::photon::trace_photons;
 use cache::{CacheParams, Gather, IrradianceCache, gather, make_record};
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::spawn_ray;
-use chronolux_core::material;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::hash_words;
@@ -243,8 +242,7 @@ pub fn gather_ray_hit(
             first = Some(((si.p - x).length(), si.instance));
         }
         let wo = -ray.d.normalize();
-        let mat = &scene.materials[si.material as usize];
-        let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
+        let bsdf = scene.bsdf(&si);
         let (u_lobe, u_dir) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
         if bsdf.has_non_delta() {
             let ns = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };

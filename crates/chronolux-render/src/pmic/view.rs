@@ -10,7 +10,6 @@ use chronolux_core::bsdf::microfacet::MIN_ALPHA;
 use chronolux_core::bsdf::{Bsdf, TransportMode};
 use chronolux_core::color::{Rgb, max_component};
 use chronolux_core::geometry::{Ray, spawn_ray};
-use chronolux_core::material;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::sampling::rng::Pcg32;
 use chronolux_core::sampling::sampler::PixelSampler;
@@ -160,8 +159,7 @@ impl<'a, S: IndirectSource> EyeView<'a, S> {
             if render && !after_non_delta {
                 l += beta * scene.emitted(&si, wo);
             }
-            let mat = &scene.materials[si.material as usize];
-            let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
+            let bsdf = scene.bsdf(&si);
             let u_light = u.u1();
             let u_lp = u.u2();
             let u_lobe = u.u1();

@@ -28,7 +28,6 @@ use crate::kernels::direct::{NeeWeight, next_event};
 use chronolux_core::bsdf::{Bsdf, Lobes, TransportMode};
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::{Ray, spawn_ray};
-use chronolux_core::material;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
@@ -103,8 +102,7 @@ impl RadianceEstimator for SptView<'_> {
             if emission_counts {
                 l += beta * scene.emitted(&si, wo);
             }
-            let mat = &scene.materials[si.material as usize];
-            let bsdf = material::bsdf_at(mat, &scene.textures, &si.shading);
+            let bsdf = scene.bsdf(&si);
             let u_light = sampler.next_1d();
             let u_lp = sampler.next_2d();
             let u_lobe = sampler.next_1d();

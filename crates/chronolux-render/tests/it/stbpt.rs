@@ -38,7 +38,12 @@ fn stbpt_frame(
     spp: u32,
     seed: u64,
 ) -> (RenderedFrame, ReuseStats) {
-    let settings = StbptSettings {
+    stbpt_frame_with(desc, fps, frames, out, fixed(k, spp, seed))
+}
+
+/// stbpt's settings with window K fixed (no self-assessment), `spp` per frame and `seed`.
+fn fixed(k: u32, spp: u32, seed: u64) -> StbptSettings {
+    StbptSettings {
         bdpt: BdptSettings {
             spp,
             seed,
@@ -47,8 +52,7 @@ fn stbpt_frame(
         window: k,
         adaptive: false,
         ..Default::default()
-    };
-    stbpt_frame_with(desc, fps, frames, out, settings)
+    }
 }
 
 /// [`stbpt_frame`] with any settings.
@@ -404,17 +408,8 @@ fn stbpt_runs(
 ) -> Vec<RenderedFrame> {
     seeds
         .map(|seed| {
-            let settings = StbptSettings {
-                bdpt: BdptSettings {
-                    spp,
-                    seed,
-                    path_strategies: path,
-                    ..Default::default()
-                },
-                window: k,
-                adaptive: false,
-                ..Default::default()
-            };
+            let mut settings = fixed(k, spp, seed);
+            settings.bdpt.path_strategies = path;
             let (img, reuse) = stbpt_frame_with(desc.clone(), fps, out + k + 1, out, settings);
             assert_eq!(img.invalid_samples, 0);
             // The path strategies trace no light subpath.
@@ -630,15 +625,8 @@ fn stbpt_interleaved_generation_agrees_with_bdpt() {
         let mut imgs = Vec::new();
         for seed in 0..runs {
             let settings = StbptSettings {
-                bdpt: BdptSettings {
-                    spp,
-                    seed,
-                    ..Default::default()
-                },
-                window: k,
-                adaptive: false,
                 interleave: il,
-                ..Default::default()
+                ..fixed(k, spp, seed)
             };
             let (img, reuse) = stbpt_frame_with(desc.clone(), fps, k + 1, 0, settings);
             assert_eq!(img.invalid_samples, 0);

@@ -1061,21 +1061,18 @@ impl Stbpt {
         let spp = self.settings.bdpt.spp;
         let mut counts = Counts::new(n);
         let mut pilot = Pilot::new(w, h);
-        let generating = (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .filter(|&(x, y)| gen_at(x, y))
-            .count();
-        // Shares of all of f's pixels (not of the generating ones): they normalise
-        // per-pixel sums of light subpaths over the whole image.
-        let with_all = (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .filter(|&(x, y)| gen_at(x, y) && all_at(x, y))
-            .count();
+        // The pixels generating samples, and of those the ones with all strategies and the
+        // measured ones. Their shares are of all of f's pixels (not of the generating
+        // ones): they normalise per-pixel sums of light subpaths over the whole image.
+        let (mut generating, mut with_all, mut measured) = (0usize, 0usize, 0usize);
+        for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
+            if gen_at(x, y) {
+                generating += 1;
+                with_all += usize::from(all_at(x, y));
+                measured += usize::from(measured_at(x, y));
+            }
+        }
         let rho = with_all as f64 / (w as f64 * h as f64).max(1.0);
-        let measured = (0..h)
-            .flat_map(|y| (0..w).map(move |x| (x, y)))
-            .filter(|&(x, y)| gen_at(x, y) && measured_at(x, y))
-            .count();
         let rho_measured = measured as f64 / (w as f64 * h as f64).max(1.0);
         for (s, first) in
             (0..spp).flat_map(|s| (0..n_tiles).step_by(TILES_PER_BATCH).map(move |t| (s, t)))

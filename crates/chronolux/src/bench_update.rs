@@ -265,7 +265,8 @@ fn run_in_pool(a: UpdateArgs) -> Result<()> {
     }
     let settings_json = registry::resolve(tech, None, &sets).map_err(anyhow::Error::msg)?;
     let base: SptSettings = serde_json::from_value(settings_json.clone())?;
-    let mesh = chronolux_render::dept::element_map::ElementMesh::build(&sa, base.elements);
+    let mesh =
+        chronolux_render::dept::element_map::ElementMesh::build(&sa, base.elements_per_diagonal());
     if !mesh.matches(&sb) || sa.lights.len() != sb.lights.len() {
         bail!("the change alters the scene's topology; spt cannot update across it");
     }

@@ -36,6 +36,37 @@ use chronolux_core::math::{Affine3A, Vec3};
 use chronolux_core::scene::frame::FrameScene;
 use std::collections::HashMap;
 
+/// Scale of the automatic element count, [`auto_elements`]: `e = 3.5 · P^(1/6)`.
+pub const AUTO_ELEMENTS_SCALE: f64 = 3.5;
+
+/// Elements per scene diagonal for an element estimate that pools `pooled_photons`
+/// emitted photons (a frame's photons times the frames pooled): `3.5 · P^(1/6)`, within
+/// [4, 200].
+///
+/// The element is the kernel of a density estimate, so its size trades bias (large
+/// elements blur) for variance (small ones hold few photons); for a kernel estimate in
+/// two dimensions the error is least at a bandwidth `h ∝ P^(−1/6)`, i.e. elements per
+/// diagonal `∝ P^(1/6)`. Finer elements also cost more: the reconstruction's work is
+/// per element (neighbour lists, filters, change statistics), not per photon. The scale
+/// 3.5 is the middle of the least-FLIP element counts measured at 64² and 256² on
+/// RiggedSimple in the Cornell stage and on cornell-moving, for `dept-spatial` (1 frame
+/// pooled) and `spacetime-dept` (17 frames) at 2k–128k photons per frame, whose optima
+/// lie at 3.0–3.9 · P^(1/6) (BENCHMARKS.md, issue 17, "element size from the photons").
+/// The former fixed 100 per diagonal was that optimum only above ~10⁹ pooled photons.
+pub fn auto_elements(pooled_photons: f64) -> f32 {
+    (AUTO_ELEMENTS_SCALE * pooled_photons.max(1.0).powf(1.0 / 6.0)).clamp(4.0, 200.0) as f32
+}
+
+/// The elements per diagonal a technique uses: its `elements` setting when positive,
+/// otherwise [`auto_elements`] of the photons its estimates pool.
+pub fn elements_per_diagonal(setting: f32, pooled_photons: f64) -> f32 {
+    if setting > 0.0 {
+        setting
+    } else {
+        auto_elements(pooled_photons)
+    }
+}
+
 /// Largest subdivision of one triangle (k² = 4096 elements).
 pub const MAX_K: u32 = 64;
 
@@ -539,6 +570,22 @@ impl FrameElements {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The automatic count follows the kernel-bandwidth law `P^(1/6)` (64× the photons:
+    /// exactly twice the elements per diagonal, up to f32 rounding), is clamped to
+    /// [4, 200], and a positive setting is used as given.
+    #[test]
+    fn automatic_elements_grow_as_the_sixth_root_of_the_photons() {
+        for p in [1e3, 3.2e4, 1e5] {
+            let ratio = auto_elements(64.0 * p) / auto_elements(p);
+            assert!((ratio - 2.0).abs() < 1e-5, "{p}: {ratio}");
+        }
+        assert!((auto_elements(1e6) - 35.0).abs() < 1e-4);
+        assert_eq!(auto_elements(0.0), 4.0);
+        assert_eq!(auto_elements(1e30), 200.0);
+        assert_eq!(elements_per_diagonal(100.0, 1e3), 100.0);
+        assert_eq!(elements_per_diagonal(0.0, 1e6), auto_elements(1e6));
+    }
 
     /// Well-shaped triangles keep their longest edge as the subdivision length (so their
     /// elements are unchanged); a sliver's elements get area h²/8 (k = ℓ/h before the

@@ -33,7 +33,9 @@ pub struct DeptSettings {
     /// Camera samples per pixel (direct light and anti-aliasing). Default 16.
     pub spp: u32,
     /// Target element count along the scene's bounding-box diagonal (element edge =
-    /// diagonal / this). Default 100.
+    /// diagonal / this). 0 (default): chosen from the photons per frame
+    /// ([`element_map::auto_elements`]; with `auto`, from its `max_photons`), e.g. 19.7
+    /// at 32k, 31 at the default 500k photons.
     pub elements: f32,
     /// Longest chain of specular (delta and glossy) bounces followed by eye rays.
     /// Default 8.
@@ -53,7 +55,7 @@ impl Default for DeptSettings {
             photons: 500_000,
             auto: None,
             spp: 16,
-            elements: 100.0,
+            elements: 0.0,
             max_specular_depth: 8,
             max_glossy: 2,
             filter: Filter::None,
@@ -117,12 +119,20 @@ impl Dept {
         Dept { settings }
     }
 
+    /// Elements per scene diagonal: `elements`, or when 0 the automatic count for one
+    /// frame's photons (with the stopping rule: its most photons).
+    pub fn elements_per_diagonal(&self) -> f32 {
+        let s = &self.settings;
+        let photons = s.auto.map_or(s.photons, |a| a.max_photons);
+        element_map::elements_per_diagonal(s.elements, photons as f64)
+    }
+
     /// Photon pass and reconstruction of frame `frame`: photons `frame·N .. (frame+1)·N`
     /// for a fixed count `N`; with the stopping rule, the first photons of
     /// `frame·max_photons ..`, in batches until [`budget::next_total`] says stop.
     pub fn solve(&self, scene: &FrameScene, frame: u32) -> DeptFrame {
         let s = &self.settings;
-        let mesh = ElementMesh::build(scene, s.elements);
+        let mesh = ElementMesh::build(scene, self.elements_per_diagonal());
         let elements = FrameElements::new(scene, &mesh);
         let mut photons = FramePhotons::new(mesh.element_count());
         let (base, mut total) = match s.auto {
@@ -280,6 +290,10 @@ impl crate::sequence::SequenceRenderer for DeptSequence {
         let mut out = self.dept.render_solved(scene, frame, &solved, progress);
         out.report
             .insert("photons".into(), solved.photons.photons().into());
+        out.report.insert(
+            "elements_per_diagonal".into(),
+            self.dept.elements_per_diagonal().into(),
+        );
         out
     }
 

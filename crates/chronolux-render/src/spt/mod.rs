@@ -143,7 +143,9 @@ pub struct SptSettings {
     pub audit: bool,
     /// Camera samples per pixel. Default 16.
     pub spp: u32,
-    /// Target element count along the scene's bounding-box diagonal. Default 100.
+    /// Target element count along the scene's bounding-box diagonal. 0 (default): chosen
+    /// from the pool's photons ([`crate::dept::element_map::auto_elements`]; 29 at the
+    /// default 300k).
     pub elements: f32,
     /// Longest chain of delta bounces followed by eye rays. Default 8.
     pub max_specular_depth: u32,
@@ -172,7 +174,7 @@ impl Default for SptSettings {
             path_tolerance: 1e-4,
             audit: false,
             spp: 16,
-            elements: 100.0,
+            elements: 0.0,
             max_specular_depth: 8,
             max_glossy_depth: 2,
             glossy_roughness: 0.5,
@@ -183,6 +185,12 @@ impl Default for SptSettings {
 }
 
 impl SptSettings {
+    /// Elements per scene diagonal: `elements`, or when 0 the automatic count for the
+    /// pool's photons (the photons each element estimate holds).
+    pub fn elements_per_diagonal(&self) -> f32 {
+        crate::dept::element_map::elements_per_diagonal(self.elements, self.photons as f64)
+    }
+
     /// The per-frame budget of these settings for a pool of `z` photons.
     pub fn frame_budget(&self, z: u64) -> Budget {
         Budget {

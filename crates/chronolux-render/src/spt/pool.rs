@@ -436,7 +436,7 @@ pub struct SptState {
 impl SptState {
     /// Shoots the whole pool in `scene`, on an element mesh built from it.
     pub fn new(scene: Arc<FrameScene>, settings: SptSettings) -> SptState {
-        let mesh = ElementMesh::build(&scene, settings.elements);
+        let mesh = ElementMesh::build(&scene, settings.elements_per_diagonal());
         Self::new_on_mesh(scene, settings, mesh)
     }
 

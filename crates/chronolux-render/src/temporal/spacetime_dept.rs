@@ -96,7 +96,12 @@ pub struct SpacetimeSettings {
     /// ([`crate::dept::reuse`]); 0: none; at most `window` is used (a farm segment has
     /// `window` frames of context). Default 8.
     pub light_history: u32,
-    /// Target element count along the scene diagonal. Default 100.
+    /// Target element count along the scene diagonal. 0 (default): chosen from the
+    /// photons an element's estimate pools, a frame's photons (with `auto`, its
+    /// `max_photons`) times the whole window's 2K + 1 frames
+    /// ([`crate::dept::element_map::auto_elements`]): e.g. 32 at 32k photons per frame
+    /// and K = 8, 38 at the default 100k. Not from the frames a window actually keeps, so the mesh,
+    /// and with it every image, is the same in a farm segment as in a single run.
     pub elements: f32,
     /// Longest specular chain of eye rays. Default 8.
     pub max_specular_depth: u32,
@@ -157,7 +162,7 @@ impl Default for SpacetimeSettings {
             auto: None,
             spp: 16,
             light_history: 8,
-            elements: 100.0,
+            elements: 0.0,
             max_specular_depth: 8,
             max_glossy: 2,
             window: 8,
@@ -176,6 +181,14 @@ impl Default for SpacetimeSettings {
 }
 
 impl SpacetimeSettings {
+    /// Elements per scene diagonal: `elements`, or when 0 the automatic count for the
+    /// photons of a whole window (see `elements`).
+    pub fn elements_per_diagonal(&self) -> f32 {
+        let photons = self.auto.map_or(self.photons, |a| a.max_photons);
+        let pooled = photons as f64 * (2 * self.window as u64 + 1) as f64;
+        crate::dept::element_map::elements_per_diagonal(self.elements, pooled)
+    }
+
     /// These settings with `--photons` applied (`None`: unchanged).
     pub fn with_photons(mut self, p: Option<PhotonCount>) -> Self {
         match p {
@@ -659,7 +672,7 @@ impl SequenceRenderer for SpacetimeDept {
         let scene_arc = source.frame(frame);
         let scene = &*scene_arc;
         if !self.mesh.as_ref().is_some_and(|m| m.matches(scene)) {
-            self.mesh = Some(ElementMesh::build(scene, s.elements));
+            self.mesh = Some(ElementMesh::build(scene, s.elements_per_diagonal()));
             self.frames.clear();
         }
         // Frames must arrive in increasing order; a jump back restarts.
@@ -818,6 +831,10 @@ impl SequenceRenderer for SpacetimeDept {
         let mean_pooled =
             pooled.iter().map(|&m| m as f64).sum::<f64>() / pooled.len().max(1) as f64;
         img.report.insert("light_spp".into(), mean_pooled.into());
+        img.report.insert(
+            "elements_per_diagonal".into(),
+            s.elements_per_diagonal().into(),
+        );
         if history > 0 {
             self.history.push((frame, scene_arc.clone(), eye));
         }
@@ -861,6 +878,32 @@ mod tests {
         for c in 0..9 {
             assert_eq!(choose_window(&series, c, 3.0, 0.02), (0, 8), "centre {c}");
         }
+    }
+
+    /// The automatic element count is that of a whole window's photons (2K + 1 frames,
+    /// with the stopping rule its most photons per frame), whatever frame is output.
+    #[test]
+    fn automatic_elements_pool_a_whole_window() {
+        use crate::dept::element_map::auto_elements;
+        let s = SpacetimeSettings {
+            photons: 4000,
+            window: 4,
+            ..Default::default()
+        };
+        assert_eq!(s.elements_per_diagonal(), auto_elements(36_000.0));
+        let with_rule = SpacetimeSettings {
+            auto: Some(AutoPhotons {
+                max_photons: 8000,
+                ..Default::default()
+            }),
+            ..s.clone()
+        };
+        assert_eq!(with_rule.elements_per_diagonal(), auto_elements(72_000.0));
+        let fixed = SpacetimeSettings {
+            elements: 100.0,
+            ..s
+        };
+        assert_eq!(fixed.elements_per_diagonal(), 100.0);
     }
 
     #[test]

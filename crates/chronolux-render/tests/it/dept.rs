@@ -713,6 +713,8 @@ fn dept_metal_sphere_agrees_with_path_tracing() {
         let img = Dept::new(DeptSettings {
             spp: 128,
             photons: 1_000_000,
+            // The bias allowance below is derived at 100 elements per diagonal.
+            elements: 100.0,
             max_glossy,
             seed,
             ..DeptSettings::spatial()

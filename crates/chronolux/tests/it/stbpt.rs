@@ -48,3 +48,43 @@ fn stbpt_writes_reuse_statistics_into_run_json() {
         assert_eq!(strategies["decision"], "fixed", "frame {f}: {strategies}");
     }
 }
+
+/// `interleave` above the frames a window holds (here the 2-frame clip) leaves pixels that
+/// no frame generates: the render says so on stderr (it still renders: those pixels are
+/// filled, `reuse.filled`), and an `interleave` within the window says nothing.
+#[test]
+fn stbpt_warns_when_interleave_exceeds_the_window() {
+    let dir = temp_dir("stbpt-interleave-warn");
+    let render = |n: &str| {
+        run([
+            "render",
+            "--output",
+            dir.to_str().unwrap(),
+            "--method",
+            "stbpt",
+            "--set",
+            &format!("interleave={n}"),
+            "--frames",
+            "0..2",
+            "--resolution",
+            "16x16",
+            "--spp",
+            "1",
+            "--no-preview",
+        ])
+    };
+    let err = ok(&render("4"));
+    assert!(
+        err.contains("warning") && err.contains("interleave=4 is more than the 2 frames"),
+        "{err}"
+    );
+    let filled: u64 = manifest(&dir)["frames"]
+        .as_array()
+        .expect("frames")
+        .iter()
+        .map(|f| f["stats"]["reuse"]["filled"].as_u64().unwrap_or(0))
+        .sum();
+    assert!(filled > 0, "no pixel was filled");
+    let err = ok(&render("2"));
+    assert!(!err.contains("interleave="), "{err}");
+}

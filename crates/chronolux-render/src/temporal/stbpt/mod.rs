@@ -702,6 +702,17 @@ impl SequenceRenderer for Stbpt {
         }
         if self.next == 0 {
             self.next = list.partition_point(|&g| g.saturating_add(k) < frame);
+            let n = self.settings.interleave as usize;
+            let frames = (2 * k as usize + 1).min(list.len());
+            if n > frames {
+                log::warn!(
+                    "stbpt: interleave={n} is more than the {frames} frames a window holds here \
+                     (2K + 1 = {}, clip {}): pixels that no frame of their window generates are \
+                     path traced in every frame (reuse.filled in run.json); use interleave ≤ {frames}",
+                    2 * k + 1,
+                    list.len()
+                );
+            }
         }
         self.last_output = Some(frame);
         while self.next < list.len() && list[self.next] <= frame.saturating_add(k) {

@@ -52,7 +52,9 @@ pub const AUTO_ELEMENTS_SCALE: f64 = 3.5;
 /// RiggedSimple in the Cornell stage and on cornell-moving, for `dept-spatial` (1 frame
 /// pooled) and `spacetime-dept` (17 frames) at 2k–128k photons per frame, whose optima
 /// lie at 3.0–3.9 · P^(1/6) (BENCHMARKS.md, issue 17, "element size from the photons").
-/// The former fixed 100 per diagonal was that optimum only above ~10⁹ pooled photons.
+/// The former fixed 100 per diagonal is that optimum only at ~5·10⁸ pooled photons.
+/// Calibrated in FLIP at 64² and 256²: a much larger image shows the blur of coarse
+/// elements over more pixels, where a fixed finer count (`elements`) may pay.
 pub fn auto_elements(pooled_photons: f64) -> f32 {
     (AUTO_ELEMENTS_SCALE * pooled_photons.max(1.0).powf(1.0 / 6.0)).clamp(4.0, 200.0) as f32
 }

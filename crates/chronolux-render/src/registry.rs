@@ -205,15 +205,21 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
     &crate::spt::TECHNIQUE,
 ];
 
-/// The technique `render` uses when no `--method` is given: `stbpt`, the one the
-/// equal-quality benchmarks (BENCHMARKS.md) show ahead of frame-by-frame rendering on
-/// every scene measured with a static camera and on the moving-camera `builtin:dolly`, and
-/// the only temporal technique that is unbiased (it converges to `bdpt`) and renders the
-/// demo's caustics without fireflies at the effort of frame-by-frame path tracing.
+/// The technique `render` uses when no `--method` is given: `spacetime-dept`, the one the
+/// equal-quality benchmarks (BENCHMARKS.md, "spacetime-dept against stbpt, each at its
+/// defaults") show needing the least CPU at equal FLIP on every scene measured: the demo,
+/// the peers' cornell-moving, a skinned character and the moving-camera `builtin:dolly`
+/// (1.1–12.7× less than `stbpt`, which was the default before; 3.4× to over 18× less than
+/// frame-by-frame `path` on the skinned character, cornell-moving and the dolly). Its
+/// photons are pooled over a window of frames where the animation leaves the light
+/// unchanged, and the eye pass reads caustics from them, so the demo renders without fireflies through the glass (49 frames at 256² in 108 CPU seconds,
+/// stbpt 750; BENCHMARKS.md, "Issue 17: the default").
+/// It is biased (element size, temporal pooling): its error flattens where `stbpt`'s keeps
+/// falling (`--method stbpt` for an unbiased render that converges to `bdpt`).
 /// One default rather than a per-scene rule: what a scene needs (reuse or not) is decided
-/// by the technique from its own reuse statistics while it renders, not guessed by the
-/// driver before the scene is seen.
-pub const DEFAULT_METHOD: &str = "stbpt";
+/// by the technique from the animation while it renders (its change test cuts the
+/// temporal window), not guessed by the driver before the scene is seen.
+pub const DEFAULT_METHOD: &str = "spacetime-dept";
 
 /// The technique called `name`, or an error listing the known ones.
 pub fn find(name: &str) -> Result<&'static dyn Technique, String> {

@@ -117,6 +117,8 @@ fn a_settings_file_sets_keys_of_the_chosen_method() {
     fails(
         &run([
             "render",
+            "--method",
+            "path",
             "--config",
             file.to_str().unwrap(),
             "--output",

@@ -53,10 +53,10 @@ fn demo_three_frames_manifest_preview_and_resume() {
         assert!((t - i as f64 / 24.0).abs() < 1e-6, "{t}");
     }
     assert_eq!(m["settings"]["resolution"], serde_json::json!([24, 24]));
-    // Without --method, `render` uses the registry's default technique (stbpt, whose
-    // per-sample settings are its BDPT's).
-    assert_eq!(m["settings"]["method"], "stbpt");
-    assert_eq!(m["settings"]["technique"]["bdpt"]["spp"], 2);
+    // Without --method, `render` uses the registry's default technique (spacetime-dept,
+    // whose `spp` is its eye pass's camera samples).
+    assert_eq!(m["settings"]["method"], "spacetime-dept");
+    assert_eq!(m["settings"]["technique"]["spp"], 2);
     assert_eq!(m["settings"]["fps"], 24.0);
     assert!(m["finished"].is_string());
     assert!(m["scene"]["triangles"].as_u64().unwrap() > 0);

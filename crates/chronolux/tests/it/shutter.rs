@@ -14,7 +14,7 @@ fn render(dir: &std::path::Path, extra: &[&str]) -> std::process::Output {
     ];
     args.extend(FAST);
     args.extend(extra);
-    // The path tracer unless the test names another method (the default is stbpt).
+    // The path tracer unless the test names another method (the default is spacetime-dept).
     if !extra.contains(&"--method") {
         args.extend(["--method", "path"]);
     }

@@ -18,3 +18,5 @@ $B compare spacetime-dept-default reference --versus path-18spp --plot demo-defa
 # (by mistake, the first 64x64 run of `render` without --method was still stbpt: 6.47-7.03 CPU s,
 # FLIP 0.0773, relMSE 0.0052, flicker 0.0339; its run.json is stbpt64.run.json)
 # docs/demo-default-vs-path.png: st49/frame_0006.png | path6/frame_0006.png side by side.
+# docs/demo.png (README's first image): 29.2 CPU s
+/usr/bin/time -f "%U %S %e" $B render --method spacetime-dept --frames 24 --resolution 512x512 --spp 64 --output hero --no-preview

@@ -237,9 +237,8 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         // Measured (BENCHMARKS.md, "Issue 17: the default"): on sky-lit models the default
         // needs 1.7–12× the CPU of `path` at equal error.
         log::warn!(
-            "{} is lit only from infinity (sky or sun), where the default method, {}, gains nothing: --method path renders it faster ({} flickers less)",
+            "{} is lit only from infinity (sky or sun), where the default method, {}, gains nothing: --method path renders it faster",
             input.source,
-            registry::DEFAULT_METHOD,
             registry::DEFAULT_METHOD
         );
     }

@@ -215,9 +215,10 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
 /// unchanged, and the eye pass reads caustics from them, so the demo renders without fireflies through the glass (49 frames at 256² in 108 CPU seconds,
 /// stbpt 750; BENCHMARKS.md, "Issue 17: the default").
 /// It is biased (element size, temporal pooling): its error flattens where `stbpt`'s keeps
-/// falling (`--method stbpt` for an unbiased render that converges to `bdpt`). On open
-/// scenes lit only by the sky it gains nothing over `path` (12× and 1.7× the CPU at equal
-/// FLIP on BoxAnimated and InterpolationTest); the README says so.
+/// falling (`--method stbpt` for an unbiased render that converges to `bdpt`). On models
+/// lit only by the sky it is 2.4× faster than `path` at equal FLIP where little moves
+/// (InterpolationTest) and 2.5× slower where the whole model moves (BoxAnimated); the
+/// README says so.
 /// One default rather than a per-scene rule: what a scene needs (reuse or not) is decided
 /// by the technique from the animation while it renders (its change test cuts the
 /// temporal window), not guessed by the driver before the scene is seen.

@@ -135,19 +135,6 @@ pub struct Exec {
     pub segment: Option<crate::farm::SegmentRun>,
 }
 
-/// True when every light of `desc` is at infinity (an environment or a directional light):
-/// no point or spot light, no emissive material.
-fn lit_only_from_infinity(desc: &chronolux_core::scene::desc::SceneDesc) -> bool {
-    use chronolux_core::scene::desc::LightKind;
-    let infinite =
-        desc.environment.is_some() || desc.lights.iter().any(|l| l.kind == LightKind::Directional);
-    let finite = desc.lights.iter().any(|l| l.kind != LightKind::Directional)
-        || desc.materials.iter().any(|m| {
-            m.emissive != chronolux_core::color::Rgb::ZERO || m.emissive_texture.is_some()
-        });
-    infinite && !finite
-}
-
 /// The configuration the flags (and `--config`) give, checked, and the scene loaded.
 pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)> {
     // Everything that can be checked without the scene is checked before loading it.
@@ -233,15 +220,6 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         stage: args.scene.stage.clone().or(prev.stage.clone()),
     };
     let input = scene_input::load(&scene_args)?;
-    if args.method.is_none() && prev.method.is_none() && lit_only_from_infinity(&input.desc) {
-        // Measured (BENCHMARKS.md, "Issue 17: the default"): on sky-lit models the default
-        // needs 1.7–12× the CPU of `path` at equal error.
-        log::warn!(
-            "{} is lit only from infinity (sky or sun), where the default method, {}, gains nothing: --method path renders it faster",
-            input.source,
-            registry::DEFAULT_METHOD
-        );
-    }
     let last = last_frame(&input.desc, input.animation, fps);
     let frames = match requested_frames {
         Some(f) => f,

@@ -1082,3 +1082,75 @@ fn adaptive_support_follows_the_photon_density() {
         .expect("a ceiling element");
     assert_eq!(s2[2 * ceiling], ADAPTIVE_RANGE * sigma0 * sigma0);
 }
+
+/// Under a sky (InterpolationTest, made Lambertian, has no lights: the default environment
+/// is added), the DEPT eye pass takes direct light at a diffuse surface by MIS of a light sample and the
+/// BSDF sample (light samples alone were noisy for a sky: BENCHMARKS.md, "Issue 17: the
+/// default"). Both halves are unbiased for the direct light, so its mean per 8×8 block
+/// agrees with the path tracer's direct light (same split convention) within 4 standard
+/// errors of the difference (each method rendered with two seeds; 16 blocks, so a false
+/// failure has probability < 10⁻³) and no bias term. A missing half of the MIS (weights
+/// summing to less than 1) or a double count (more than 1) shifts every lit block by the
+/// BSDF-sampled share of the sky, far beyond that.
+#[test]
+fn dept_direct_light_under_a_sky_agrees_with_path_tracing() {
+    let Some(path) = chronolux_core::testing::shared_file("scenes/InterpolationTest.glb") else {
+        return;
+    };
+    let mut desc = chronolux_io::gltf::load(&path).unwrap();
+    assert!(desc.environment.is_some(), "the default sky");
+    // Lambertian only (no specular layer), so that the camera rays' first hits are read as
+    // diffuse surfaces, where the MIS is (a glossy surface continues the path instead).
+    for m in &mut desc.materials {
+        m.specular = 0.0;
+        m.metallic = 0.0;
+    }
+    let w = 32u32;
+    let scene = frame0(desc, w, w);
+    let direct =
+        |img: chronolux_render::integrator::RenderedFrame| img.light.expect("a light split").direct;
+    let pt = |seed| {
+        direct(
+            PathTracer::new(PathSettings {
+                spp: 256,
+                seed,
+                ..Default::default()
+            })
+            .render(&scene, 0, &|_| {}),
+        )
+    };
+    let dept = |seed| {
+        let img = Dept::new(DeptSettings {
+            spp: 64,
+            photons: 20_000,
+            seed,
+            ..DeptSettings::spatial()
+        })
+        .render(&scene, 0, &|_| {});
+        assert_eq!(img.invalid_samples, 0);
+        direct(img)
+    };
+    let blocks: Vec<Vec<usize>> = (0..16)
+        .map(|k| {
+            let (bx, by) = (k % 4, k / 4);
+            (0..64)
+                .map(|j| (by * 8 + j / 8) * w as usize + bx * 8 + j % 8)
+                .collect()
+        })
+        .collect();
+    let reference = group_means(&pt(1), &pt(2), &blocks);
+    let ours = group_means(&dept(1), &dept(2), &blocks);
+    for (k, (x, r)) in ours.iter().zip(&reference).enumerate() {
+        let tol = 4.0 * (x.1 * x.1 + r.1 * r.1).sqrt();
+        eprintln!(
+            "block {k}: dept {:.5} ± {:.5}, path {:.5} ± {:.5}",
+            x.0, x.1, r.0, r.1
+        );
+        assert!(
+            (x.0 - r.0).abs() <= tol,
+            "block {k}: dept {} vs path {} (tolerance {tol})",
+            x.0,
+            r.0
+        );
+    }
+}

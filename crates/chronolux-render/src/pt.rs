@@ -2,12 +2,11 @@
 //! (power heuristic), Russian roulette, Owen-scrambled Sobol samples per pixel.
 
 use crate::integrator::{Integrator, RadianceEstimator, RenderedFrame, render_camera_rays};
-use crate::kernels::direct::{NeeWeight, next_event};
+use crate::kernels::direct::{NeeWeight, bsdf_hit_weight, next_event};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
 use chronolux_core::geometry::{Ray, spawn_ray};
 use chronolux_core::math::Vec3;
-use chronolux_core::sampling::power_heuristic;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
@@ -102,9 +101,7 @@ impl PathTracer {
                         let w = if specular_bounce {
                             1.0
                         } else {
-                            let pl = scene.light_sampler.pmf(ei)
-                                * scene.lights[ei].pdf_li(prev_p, prev_p + ray.d);
-                            power_heuristic(1.0, prev_pdf, 1.0, pl)
+                            bsdf_hit_weight(scene, ei, prev_p, prev_p + ray.d, prev_pdf)
                         };
                         l[slot(scattered, specular_bounce)] += beta * env.radiance(ray.d) * w;
                     }
@@ -121,11 +118,7 @@ impl PathTracer {
                     1.0
                 } else {
                     match scene.light_of(si.tri) {
-                        Some(li) => {
-                            let pl =
-                                scene.light_sampler.pmf(li) * scene.lights[li].pdf_li(prev_p, si.p);
-                            power_heuristic(1.0, prev_pdf, 1.0, pl)
-                        }
+                        Some(li) => bsdf_hit_weight(scene, li, prev_p, si.p, prev_pdf),
                         None => 1.0,
                     }
                 };

@@ -95,8 +95,8 @@ pub struct RenderArgs {
     /// emitters only, 2 adds direct lighting. Default: unlimited (Russian roulette ends paths).
     #[arg(long, value_name = "N")]
     pub max_depth: Option<u32>,
-    /// Light-transport method (default `spacetime-dept`). Every technique's settings can be set with
-    /// --set; an unknown key (e.g. `--set list=1`) lists the valid ones.
+    /// Light-transport method (default `spacetime-dept`). Every technique's settings can be
+    /// set with --set; an unknown key (e.g. `--set list=1`) lists the valid ones.
     #[arg(long, value_name = "METHOD", long_help = method_help(),
           value_parser = clap::builder::PossibleValuesParser::new(chronolux_render::registry::names()))]
     pub method: Option<String>,

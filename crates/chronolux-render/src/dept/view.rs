@@ -36,13 +36,12 @@ use super::element_map::ElementMesh;
 use super::reconstruct::ElementSolution;
 use super::reuse::Reach;
 use crate::integrator::RadianceEstimator;
-use crate::kernels::direct::{NeeWeight, next_event};
+use crate::kernels::direct::{NeeWeight, bsdf_hit_weight, next_event};
 use chronolux_core::bsdf::microfacet::MIN_ALPHA;
 use chronolux_core::bsdf::{Bsdf, TransportMode};
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::{Ray, spawn_ray};
 use chronolux_core::math::Vec3;
-use chronolux_core::sampling::power_heuristic;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
@@ -122,9 +121,7 @@ impl DeptView<'_> {
                     } else {
                         let w = match (specular_bounce, scene.environment_light) {
                             (false, Some(ei)) => {
-                                let pl = scene.light_sampler.pmf(ei)
-                                    * scene.lights[ei].pdf_li(prev_p, prev_p + ray.d);
-                                power_heuristic(1.0, prev_pdf, 1.0, pl)
+                                bsdf_hit_weight(scene, ei, prev_p, prev_p + ray.d, prev_pdf)
                             }
                             _ => 1.0,
                         };
@@ -142,11 +139,7 @@ impl DeptView<'_> {
             if le != Rgb::ZERO {
                 // After a glossy vertex, MIS-weighted against its light sample.
                 let w = match (specular_bounce, scene.light_of(si.tri)) {
-                    (false, Some(li)) => {
-                        let pl =
-                            scene.light_sampler.pmf(li) * scene.lights[li].pdf_li(prev_p, si.p);
-                        power_heuristic(1.0, prev_pdf, 1.0, pl)
-                    }
+                    (false, Some(li)) => bsdf_hit_weight(scene, li, prev_p, si.p, prev_pdf),
                     _ => 1.0,
                 };
                 l[slot(scattered, specular_bounce)] += beta * le * w;
@@ -194,12 +187,10 @@ impl DeptView<'_> {
                             if let (Some(env), Some(ei)) =
                                 (scene.environment, scene.environment_light)
                             {
-                                let pl = scene.light_sampler.pmf(ei)
-                                    * scene.lights[ei].pdf_li(si.p, si.p + r.d);
                                 l[s] += beta
                                     * bs.weight
                                     * env.radiance(r.d)
-                                    * power_heuristic(1.0, bs.pdf, 1.0, pl);
+                                    * bsdf_hit_weight(scene, ei, si.p, si.p + r.d, bs.pdf);
                             }
                         }
                         Some(h2) => {
@@ -211,10 +202,10 @@ impl DeptView<'_> {
                                 if let Some(rr) = reach.as_deref_mut() {
                                     rr.vertex(si2.p);
                                 }
-                                let pl = scene.light_sampler.pmf(li)
-                                    * scene.lights[li].pdf_li(si.p, si2.p);
-                                l[s] +=
-                                    beta * bs.weight * le * power_heuristic(1.0, bs.pdf, 1.0, pl);
+                                l[s] += beta
+                                    * bs.weight
+                                    * le
+                                    * bsdf_hit_weight(scene, li, si.p, si2.p, bs.pdf);
                             }
                         }
                     }

@@ -73,6 +73,15 @@ pub enum NeeWeight {
     LightOnly,
 }
 
+/// Power-heuristic MIS weight of emission from light `li` at `to` (for a light at
+/// infinity, any point along the direction from `from`) found by a BSDF-sampled ray from
+/// `from` with solid-angle pdf `bsdf_pdf`, against [`next_event`]'s light sampling.
+#[inline]
+pub fn bsdf_hit_weight(scene: &FrameScene, li: usize, from: Vec3, to: Vec3, bsdf_pdf: f32) -> f32 {
+    let pl = scene.light_sampler.pmf(li) * scene.lights[li].pdf_li(from, to);
+    power_heuristic(1.0, bsdf_pdf, 1.0, pl)
+}
+
 /// Next-event estimation at `si` seen from `wo`: one light chosen by the scene's light
 /// sampler with `u_light`, one point on it with `u_lp`, a shadow ray, through the
 /// non-delta lobes of `bsdf`. Returns `beta · f · cos · Le · w / (pmf · pdf)` (zero when

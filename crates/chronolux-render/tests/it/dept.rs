@@ -664,6 +664,20 @@ fn pixels_where(
     out
 }
 
+/// The pixel indices (row-major) of each 8×8 block of a `w`×`w` image, `w` a multiple of 8,
+/// blocks in row-major order.
+fn blocks_8x8(w: u32) -> Vec<Vec<usize>> {
+    let (w, n) = (w as usize, w as usize / 8);
+    (0..n * n)
+        .map(|k| {
+            let (bx, by) = (k % n, k / n);
+            (0..64)
+                .map(|j| (by * 8 + j / 8) * w + bx * 8 + j % 8)
+                .collect()
+        })
+        .collect()
+}
+
 /// Mean (channel average) of each group of pixels, from two independent renders `a`, `b`:
 /// the groups' means of (a + b)/2 and their standard errors, from the per-pixel estimate
 /// (a − b)²/4 of the variance of (a + b)/2 (unbiased for independent renders).
@@ -815,11 +829,10 @@ fn spacetime_dept_reuses_pixel_light_only_where_nothing_changed() {
     let diffuse = pixels_where(&scene6, |m| {
         !["metal", "glass", "glossy_orange"].contains(&m)
     });
-    let blocks: Vec<Vec<usize>> = (0..16)
-        .map(|k| {
-            let (bx, by) = (k % 4, k / 4);
-            (0..64)
-                .map(|j| (by * 8 + j / 8) * w as usize + bx * 8 + j % 8)
+    let blocks: Vec<Vec<usize>> = blocks_8x8(w)
+        .into_iter()
+        .map(|b| {
+            b.into_iter()
                 .filter(|i| diffuse.contains(i))
                 .collect::<Vec<usize>>()
         })
@@ -1084,9 +1097,9 @@ fn adaptive_support_follows_the_photon_density() {
 }
 
 /// Under a sky (InterpolationTest, made Lambertian, has no lights: the default environment
-/// is added), the DEPT eye pass takes direct light at a diffuse surface by MIS of a light sample and the
-/// BSDF sample (light samples alone were noisy for a sky: BENCHMARKS.md, "Issue 17: the
-/// default"). Both halves are unbiased for the direct light, so its mean per 8×8 block
+/// is added), the DEPT eye pass takes direct light at a diffuse surface by MIS of a light
+/// sample and the BSDF sample (light samples alone were noisy for a sky: BENCHMARKS.md,
+/// "Issue 17: the default"). Both halves are unbiased for the direct light, so its mean per 8×8 block
 /// agrees with the path tracer's direct light (same split convention) within 4 standard
 /// errors of the difference (each method rendered with two seeds; 16 blocks, so a false
 /// failure has probability < 10⁻³) and no bias term. A missing half of the MIS (weights
@@ -1130,14 +1143,7 @@ fn dept_direct_light_under_a_sky_agrees_with_path_tracing() {
         assert_eq!(img.invalid_samples, 0);
         direct(img)
     };
-    let blocks: Vec<Vec<usize>> = (0..16)
-        .map(|k| {
-            let (bx, by) = (k % 4, k / 4);
-            (0..64)
-                .map(|j| (by * 8 + j / 8) * w as usize + bx * 8 + j % 8)
-                .collect()
-        })
-        .collect();
+    let blocks = blocks_8x8(w);
     let reference = group_means(&pt(1), &pt(2), &blocks);
     let ours = group_means(&dept(1), &dept(2), &blocks);
     for (k, (x, r)) in ours.iter().zip(&reference).enumerate() {

@@ -213,8 +213,8 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
 /// frame-by-frame `path` on the skinned character, cornell-moving and the dolly). Its
 /// photons are pooled over a window of frames where the animation leaves the light
 /// unchanged, and the eye pass reads caustics from them, so the demo renders without
-/// fireflies through the glass (49 frames at 256² in 108 CPU seconds, stbpt 750;
-/// BENCHMARKS.md, "Issue 17: the default").
+/// fireflies through the glass (49 frames at 256² in 108 CPU seconds, stbpt 750; 99 with
+/// the x86-64-v3 build: BENCHMARKS.md, "Issue 17: the default").
 /// It is biased (element size, temporal pooling): its error flattens where `stbpt`'s keeps
 /// falling (`--method stbpt` for an unbiased render that converges to `bdpt`). On models
 /// lit only by the sky it is 2.4× faster than `path` at equal FLIP where little moves

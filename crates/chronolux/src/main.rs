@@ -37,47 +37,25 @@ fn main() {
 fn cpu_has_build_features() -> Result<(), String> {
     #[cfg(target_arch = "x86_64")]
     {
+        // (name, compiled to use it, present on this CPU)
+        macro_rules! feature {
+            ($f:tt) => {
+                (
+                    $f,
+                    cfg!(target_feature = $f),
+                    std::is_x86_feature_detected!($f),
+                )
+            };
+        }
         let features = [
-            (
-                "avx2",
-                cfg!(target_feature = "avx2"),
-                std::is_x86_feature_detected!("avx2"),
-            ),
-            (
-                "fma",
-                cfg!(target_feature = "fma"),
-                std::is_x86_feature_detected!("fma"),
-            ),
-            (
-                "bmi1",
-                cfg!(target_feature = "bmi1"),
-                std::is_x86_feature_detected!("bmi1"),
-            ),
-            (
-                "bmi2",
-                cfg!(target_feature = "bmi2"),
-                std::is_x86_feature_detected!("bmi2"),
-            ),
-            (
-                "lzcnt",
-                cfg!(target_feature = "lzcnt"),
-                std::is_x86_feature_detected!("lzcnt"),
-            ),
-            (
-                "popcnt",
-                cfg!(target_feature = "popcnt"),
-                std::is_x86_feature_detected!("popcnt"),
-            ),
-            (
-                "movbe",
-                cfg!(target_feature = "movbe"),
-                std::is_x86_feature_detected!("movbe"),
-            ),
-            (
-                "f16c",
-                cfg!(target_feature = "f16c"),
-                std::is_x86_feature_detected!("f16c"),
-            ),
+            feature!("avx2"),
+            feature!("fma"),
+            feature!("bmi1"),
+            feature!("bmi2"),
+            feature!("lzcnt"),
+            feature!("popcnt"),
+            feature!("movbe"),
+            feature!("f16c"),
         ];
         let missing: Vec<&str> = features
             .iter()

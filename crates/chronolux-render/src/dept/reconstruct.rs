@@ -563,17 +563,20 @@ pub struct ElementSolution {
 }
 
 impl ElementSolution {
-    /// Vertex values from per-element-side irradiance (area-weighted one-ring means).
+    /// Vertex values from per-element-side irradiance (area-weighted one-ring means over
+    /// the cells around each vertex; a cell of a cluster weighs its share of the
+    /// cluster's area).
     pub fn from_elements(mesh: &ElementMesh, fe: &FrameElements, elem: &[Rgb]) -> Self {
         let nv = mesh.vertex_count();
         let mut num = vec![Rgb::ZERO; 2 * nv];
         let mut den = vec![0.0f32; nv];
-        for e in 0..mesh.element_count() {
-            let a = fe.area[e];
+        for c in 0..mesh.cell_count() as u32 {
+            let e = mesh.cell_element(c) as usize;
+            let a = fe.area[e] * mesh.cell_share(c);
             if a <= 0.0 {
                 continue;
             }
-            for v in mesh.element_vertices(e as u32) {
+            for v in mesh.cell_vertices(c) {
                 let v = v as usize;
                 num[2 * v] += elem[2 * e] * a;
                 num[2 * v + 1] += elem[2 * e + 1] * a;

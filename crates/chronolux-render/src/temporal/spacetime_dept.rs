@@ -672,7 +672,15 @@ impl SequenceRenderer for SpacetimeDept {
         let scene_arc = source.frame(frame);
         let scene = &*scene_arc;
         if !self.mesh.as_ref().is_some_and(|m| m.matches(scene)) {
-            self.mesh = Some(ElementMesh::build(scene, s.elements_per_diagonal()));
+            let mesh = ElementMesh::build(scene, s.elements_per_diagonal());
+            log::debug!(
+                "spacetime-dept: {} elements ({} clusters of small triangles) on {} triangles, element size {:.4}",
+                mesh.element_count(),
+                mesh.cluster_count(),
+                mesh.triangle_count(),
+                mesh.element_size
+            );
+            self.mesh = Some(mesh);
             self.frames.clear();
         }
         // Frames must arrive in increasing order; a jump back restarts.

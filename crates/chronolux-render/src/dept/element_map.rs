@@ -348,10 +348,10 @@ impl ElementMesh {
                     }
                 }
                 m.cell_verts.extend(cells);
-                let area = 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length() as f64;
+                let n = (p[1] - p[0]).cross(p[2] - p[0]);
+                let area = 0.5 * n.length() as f64;
                 if ell < CLUSTER_BELOW * h {
                     let c = (p[0] + p[1] + p[2]) / (3.0 * cube);
-                    let n = (p[1] - p[0]).cross(p[2] - p[0]);
                     let key = (
                         c.x.floor() as i32,
                         c.y.floor() as i32,

@@ -5,10 +5,11 @@
 # peak memory = max RSS. A and B interleaved, 3 rounds.
 set -e
 A=${A:?binary before}; B=${B:?binary after}
+RDEMO=${RDEMO:?converged reference of the demo, 64x64, frames 0..8 (chronolux reference --frames 0..8 --resolution 64x64)}
 S=../../../shared/scenes
 # Reference: TransmissionTest (static, 128,775 triangles), frame 0 at 96x96.
 [ -d ref-tt ] || $B reference $S/TransmissionTest.glb --frames 0..1 --resolution 96x96 --max-spp 4096 --target-error 2e-4 --output ref-tt
-[ -d ref-demo ] || ln -s /work/refs/ref-demo-64 ref-demo
+[ -e ref-demo ] || ln -s "$RDEMO" ref-demo
 for r in 1 2 3; do
   for v in A B; do bin=${!v}
     /usr/bin/time -f "$v default-tt %U %S %e %M" $bin render $S/TransmissionTest.glb --frames 0..1 --resolution 96x96 --output tt-$v --no-preview 2>&1 | tail -1

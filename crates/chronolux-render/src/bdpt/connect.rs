@@ -63,6 +63,32 @@ pub fn connect(
     .map(|c| c.contribution)
 }
 
+/// Advances `sampler` exactly as [`connect`] / [`connect_with`] would for strategy
+/// (s, t) on subpaths of these lengths, without evaluating it: only s = 1 with t ≥ 2
+/// draws (its 3 numbers, whenever it gets past the checks that precede them). A
+/// technique that takes a strategy's value from elsewhere (a sample reused from another
+/// frame) calls this in its place, so the strategies it does evaluate after it draw the
+/// numbers they would have drawn in a full evaluation.
+pub fn skip_connect(
+    settings: &BdptSettings,
+    light_len: usize,
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+    sampler: &mut PixelSampler,
+) {
+    if t == 0 || t > camera.len() || s > light_len.max(usize::from(settings.path_strategies)) {
+        return;
+    }
+    if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::Light {
+        return;
+    }
+    if s == 1 && t > 1 {
+        sampler.next_1d();
+        sampler.next_2d();
+    }
+}
+
 /// A strategy's contribution as [`connect_with`] reports it.
 #[derive(Clone, Debug)]
 pub struct Connection {

@@ -57,7 +57,9 @@ use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::desc::Projection;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
-pub use connect::{Connection, Contribution, connect, connect_with, mis_weight, strategy_ratios};
+pub use connect::{
+    Connection, Contribution, connect, connect_with, mis_weight, skip_connect, strategy_ratios,
+};
 pub use vertex::{Vertex, VertexKind};
 
 /// MIS heuristic over the strategies of a path length.

@@ -155,6 +155,10 @@ fn moving_emitter() -> chronolux_core::scene::desc::SceneDesc {
 /// window is one-sided: stale contributions from the cube's later positions would not
 /// average out as they nearly do at the centre of a window over linear motion. (Checked:
 /// reusing samples regardless of validity fails this test on the emitter, t ≈ 7.)
+/// Many of its landings are re-traced from a reproduced camera prefix; under the test
+/// profile's debug assertions each such value is checked against the full evaluation in
+/// g (`prefix_strategies`). Checked: reusing one camera vertex beyond the prefix, or
+/// skipping a reused strategy's connection numbers, panics here.
 #[test]
 fn stbpt_frame_agrees_with_its_own_reference_on_a_moving_animation() {
     let (k, spp, runs, fps) = (2u32, 2u32, 12u64, 3.0f32);

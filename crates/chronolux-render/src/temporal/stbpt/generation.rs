@@ -6,7 +6,7 @@
 //! [`super::reuse`] computes the value and [`super::motion`] the motion-blur trajectory.
 
 use super::landing::{Landing, Walk, barycentrics};
-use super::reuse::Regenerated;
+use super::reuse::{Regenerated, Reproduced};
 use super::strategies::{self, Mode, Pilot, SHADOW_QUERY_COST, luminance, pilot_pixel};
 use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH, adapt};
 use crate::bdpt::{
@@ -151,6 +151,8 @@ fn window_trace<'a>(
 pub(super) struct Entry {
     /// Light vertices of the strategy: s ≤ 1 does not depend on the light subpath.
     pub(super) s: usize,
+    /// Camera vertices of the strategy (t ≥ 2).
+    pub(super) t: usize,
     pub(super) wi: Vec3,
     pub(super) r: Rgb,
     /// The contribution as computed in f (for f itself, no rounding from the split).
@@ -166,6 +168,8 @@ pub(super) struct Entry {
 pub(super) struct Scratch {
     cam: Vec<Vertex>,
     cam_rays: Vec<Ray>,
+    /// Frame f's hits of the camera subpath's rays.
+    cam_hits: Vec<Option<Hit>>,
     /// Per traced ray of the camera / light subpath: the window frames reproducing it.
     cam_masks: Vec<FrameMask>,
     light_masks: Vec<FrameMask>,
@@ -550,6 +554,7 @@ impl Generation<'_> {
                 );
                 entries.push(Entry {
                     s,
+                    t,
                     wi,
                     r,
                     c: l,
@@ -595,7 +600,7 @@ impl Generation<'_> {
                 &mut sc.wh,
                 &mut sc.cam_masks,
                 Some(&mut sc.cam_rays),
-                None,
+                Some(&mut sc.cam_hits),
             ),
         );
         let cam_cost = query_cost(st) - cost0;
@@ -841,10 +846,67 @@ impl Generation<'_> {
                     out.counts.reused[j] += 1;
                     (r, l, true)
                 }
-                Landing::RetraceConnections(r) => {
+                Landing::RetracePrefix(r) => {
                     out.counts.retraced[j] += 1;
                     let before = queries(&out.stats[j]);
-                    let l = self.camera_strategies(j, light_g, cam, &ns, &mut out.stats[j]);
+                    // Camera vertices 0..=kept are f's in g (the rays that made them give
+                    // f's hits, same materials): re-traced from f's raster position, those
+                    // rays answered with f's hits, the strategies on reproduced vertices
+                    // only taken from f (module doc, "Reuse in frame g", step 3).
+                    let kept = if self.materials_same >> j & 1 == 1 {
+                        sc.cam_masks
+                            .iter()
+                            .take_while(|&&m| m >> j & 1 == 1)
+                            .count()
+                    } else {
+                        0
+                    };
+                    let cam_g: &[Vertex] = if kept == sc.cam_masks.len() {
+                        cam
+                    } else {
+                        let mut c2 = cs0.clone();
+                        let hits = &sc.cam_hits;
+                        let mut ray_index = 0usize;
+                        let mut answered = 0u64;
+                        generate_camera_subpath_with(
+                            scene_g,
+                            self.bdpt,
+                            raster,
+                            &mut c2,
+                            &mut sc.cam_g,
+                            &mut out.stats[j],
+                            &mut |ray| {
+                                let i = ray_index;
+                                ray_index += 1;
+                                if i < kept {
+                                    answered += 1;
+                                    hits[i]
+                                } else {
+                                    scene_g.intersect(ray)
+                                }
+                            },
+                        );
+                        out.stats[j].rays -= answered;
+                        if self.shutter > 0.0 {
+                            let d = scene_g.camera.generate_ray(raster).d;
+                            around = self.trajectory(j, j, sc.cam_g.get(1), Some(d));
+                        }
+                        &sc.cam_g
+                    };
+                    let reproduced = Reproduced {
+                        camera: kept,
+                        light: light_kept,
+                        entries: &sc.entries,
+                        emission,
+                    };
+                    let l = self.prefix_strategies(
+                        j,
+                        light_g,
+                        cam_g,
+                        &ns,
+                        &reproduced,
+                        &mut out.stats[j],
+                    );
                     out.counts.retrace_queries[j] += queries(&out.stats[j]) - before;
                     (r, l, false)
                 }

@@ -36,10 +36,12 @@ pub(super) enum Landing {
     /// same lights and materials): the strategies s ≤ 1 are reused as in [`Landing::Reuse`],
     /// the strategies s ≥ 2 recomputed with the light subpath regenerated in g.
     Partial(Vec2),
-    /// Same camera, x1 (not moved) and every camera segment reproduced in g: f's camera
-    /// subpath is the walk g makes for this raster position; only the light subpath and
-    /// the connections are g's own.
-    RetraceConnections(Vec2),
+    /// Same camera and x1 not moved, but the split is not reusable in g (a camera segment
+    /// after x1 or the lights differ, or x1 is a delta or near-specular vertex): re-traced
+    /// from f's raster position, so that the camera vertices whose rays give f's hits in g
+    /// are f's (answered without a traversal) and the strategies made of reproduced
+    /// vertices only are f's values (module doc, "Reuse in frame g", step 3).
+    RetracePrefix(Vec2),
     /// A fresh BDPT evaluation in g's scene, of the same streams, for a camera ray through
     /// the raster position.
     Retrace(Vec2),
@@ -170,8 +172,8 @@ impl Generation<'_> {
             // Only the light subpath differs in g: the camera subpath and the strategies
             // s ≤ 1 are g's as well.
             Landing::Partial(r)
-        } else if self.same_camera >> j & 1 == 1 && walk.cam_segments >> j & 1 == 1 && !moved {
-            Landing::RetraceConnections(r)
+        } else if self.same_camera >> j & 1 == 1 && !moved {
+            Landing::RetracePrefix(r)
         } else {
             Landing::Retrace(r)
         }

@@ -5,13 +5,27 @@
 //! ([`camera_strategies`](Generation::camera_strategies)) when the sample is re-traced.
 
 use super::generation::{Entry, Generation};
-use crate::bdpt::{Vertex, connect};
+use crate::bdpt::{Vertex, connect, skip_connect};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::Ray;
 use chronolux_core::math::Vec3;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::stats::Stats;
+
+/// A re-traced sample's part reproduced in g (same camera, x1 not moved): what
+/// [`Generation::prefix_strategies`] takes from f.
+pub(super) struct Reproduced<'a> {
+    /// Camera rays whose hits (and the materials there) are f's in g: camera vertices
+    /// 0..=`camera` are f's.
+    pub(super) camera: usize,
+    /// Light vertices reproduced in g (0 when g's lights or materials differ from f's).
+    pub(super) light: usize,
+    /// f's strategies t ≥ 2 at x1 other than (0, 2), in the order evaluated ((t, s)
+    /// increasing), and x1's emission (0, 2).
+    pub(super) entries: &'a [Entry],
+    pub(super) emission: Option<(Rgb, f32)>,
+}
 
 /// Partial reuse in g: what the recomputed strategies are made of.
 pub(super) struct Regenerated<'a> {
@@ -156,6 +170,80 @@ impl Generation<'_> {
                     l += c.l;
                 }
             }
+        }
+        l
+    }
+
+    /// [`Generation::camera_strategies`] of a sample re-traced in frame `j` from f's raster
+    /// position, whose camera subpath `camera` in g begins with f's vertices 0..=c and
+    /// whose light subpath `light` begins with f's vertices 0..ℓ (c, ℓ: `reproduced`): the
+    /// strategies (s, t) with t ≤ c + 1 and 1 ≤ ℓ, s ≤ ℓ are made of reproduced vertices
+    /// only, and a strategy — contribution, MIS weight and the connection numbers it draws
+    /// — depends on its own vertices only, so f's value is g's where its shadow ray is
+    /// unoccluded in g (answered for the window in f). They are taken from f
+    /// (`skip_connect` keeps the connection stream aligned); the others are evaluated in
+    /// g. Same terms, same order: the sum equals the full evaluation's. Builds with debug
+    /// assertions check that against the full evaluation.
+    pub(super) fn prefix_strategies(
+        &self,
+        j: usize,
+        light: &[Vertex],
+        camera: &[Vertex],
+        conn: &PixelSampler,
+        reproduced: &Reproduced,
+        stats: &mut Stats,
+    ) -> Rgb {
+        let scene = &self.scenes[j];
+        let max_segments = self.bdpt.depth() as usize;
+        let entries = reproduced.entries;
+        let mut sampler = conn.clone();
+        let mut l = Rgb::ZERO;
+        // Cursor into `entries`, which are in (t, s) order.
+        let mut next = 0usize;
+        for t in 2..=camera.len() {
+            for s in 0..=self.bdpt.max_light_vertices(light.len()) {
+                if s + t - 1 > max_segments {
+                    continue;
+                }
+                let from_f =
+                    reproduced.light >= 1 && s <= reproduced.light && t <= reproduced.camera + 1;
+                if !from_f {
+                    if let Some(c) =
+                        connect(scene, self.bdpt, light, camera, s, t, &mut sampler, stats)
+                    {
+                        l += c.l;
+                    }
+                    continue;
+                }
+                skip_connect(self.bdpt, light.len(), camera, s, t, &mut sampler);
+                if (s, t) == (0, 2) {
+                    if let Some((e, _)) = reproduced.emission {
+                        l += e;
+                    }
+                    continue;
+                }
+                while entries.get(next).is_some_and(|e| (e.t, e.s) < (t, s)) {
+                    next += 1;
+                }
+                if let Some(e) = entries.get(next).filter(|e| (e.t, e.s) == (t, s))
+                    && e.vis >> j & 1 == 1
+                {
+                    l += e.c;
+                }
+            }
+        }
+        #[cfg(debug_assertions)]
+        {
+            let full = self.camera_strategies(j, light, camera, conn, &mut Stats::default());
+            let tol = |a: f32, b: f32| (a - b).abs() <= 1e-4 * a.abs().max(b.abs()) + 1e-6;
+            debug_assert!(
+                !(l.is_finite() && full.is_finite())
+                    || (tol(l.x, full.x) && tol(l.y, full.y) && tol(l.z, full.z)),
+                "prefix reuse {l:?} differs from the full evaluation {full:?} \
+                 (camera prefix {}, light prefix {})",
+                reproduced.camera,
+                reproduced.light
+            );
         }
         l
     }

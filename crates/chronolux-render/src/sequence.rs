@@ -115,6 +115,11 @@ pub struct ReuseStats {
     /// strategies without light-subpath vertices reused, the others recomputed here).
     pub reused_partially: u64,
     pub retraced: u64,
+    /// Of `retraced`: those re-traced from the valid prefix of their camera subpath (the
+    /// same camera and first eye vertex as where they were made: the vertices and
+    /// strategies reproduced in this frame taken from there, only the rest traced here).
+    #[serde(default)]
+    pub retraced_from_prefix: u64,
     /// Mean number of frames served by each sample generated for this frame.
     pub reuse_factor: f64,
     /// Light subpaths whose splats this frame received, per pixel.

@@ -173,12 +173,13 @@ fn stbpt_frame_agrees_with_its_own_reference_on_a_moving_animation() {
     ] {
         let reference = bdpt_reference(desc.clone(), fps, out, 256);
         let mut imgs = Vec::new();
-        let (mut reused, mut retraced) = (0, 0);
+        let (mut reused, mut retraced, mut prefix) = (0, 0, 0);
         for seed in 0..runs {
             let (img, reuse) = stbpt_frame(desc.clone(), fps, out + k + 1, out, k, spp, seed);
             assert_eq!(img.invalid_samples, 0);
             reused += reuse.reused;
             retraced += reuse.retraced;
+            prefix += reuse.retraced_from_prefix;
             if seed == 0 {
                 eprintln!("{what}: {reuse:?}");
             }
@@ -187,6 +188,14 @@ fn stbpt_frame_agrees_with_its_own_reference_on_a_moving_animation() {
         // The cube moved: samples had to be re-traced (else the test would not exercise
         // the invalid-sample path).
         assert!(retraced > 0);
+        // With the static camera, re-traces from a reproduced camera prefix (checked
+        // against the full evaluation, above); the moving camera has none.
+        assert!(prefix <= retraced);
+        assert_eq!(
+            prefix > 0,
+            what != "moving camera",
+            "{what}: {prefix} of {retraced}"
+        );
         if what != "moving emitter" {
             // Samples away from the cube were reused (the reuse path is exercised too).
             assert!(reused > retraced, "reused {reused}, re-traced {retraced}");

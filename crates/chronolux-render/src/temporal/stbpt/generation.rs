@@ -41,6 +41,9 @@ pub(super) struct Counts {
     /// strategies s ≥ 2 were recomputed with g's light subpath).
     pub(super) partial: Vec<u64>,
     pub(super) retraced: Vec<u64>,
+    /// Of the re-traced: those that began with f's camera vertices through x1 at least
+    /// (module doc, "Valid prefix of a camera subpath").
+    pub(super) prefix: Vec<u64>,
     pub(super) invalid: Vec<u64>,
     /// Ray queries (closest-hit and shadow) of the re-traced landings' camera subpaths and
     /// connections.
@@ -54,6 +57,7 @@ impl Counts {
             reused: vec![0; n],
             partial: vec![0; n],
             retraced: vec![0; n],
+            prefix: vec![0; n],
             invalid: vec![0; n],
             retrace_queries: vec![0; n],
         }
@@ -65,6 +69,7 @@ impl Counts {
             (&mut self.reused, &o.reused),
             (&mut self.partial, &o.partial),
             (&mut self.retraced, &o.retraced),
+            (&mut self.prefix, &o.prefix),
             (&mut self.invalid, &o.invalid),
             (&mut self.retrace_queries, &o.retrace_queries),
         ] {
@@ -861,6 +866,9 @@ impl Generation<'_> {
                     } else {
                         0
                     };
+                    if kept >= 1 {
+                        out.counts.prefix[j] += 1;
+                    }
                     let cam_g: &[Vertex] = if kept == sc.cam_masks.len() {
                         cam
                     } else {
@@ -1223,6 +1231,7 @@ impl Stbpt {
             p.reused += counts.reused[j];
             p.partial += counts.partial[j];
             p.retraced += counts.retraced[j];
+            p.retraced_prefix += counts.prefix[j];
             p.invalid += counts.invalid[j];
             p.served_by += 1;
             if light_tracing {

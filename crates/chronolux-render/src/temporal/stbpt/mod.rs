@@ -512,6 +512,7 @@ struct Pending {
     reused: u64,
     partial: u64,
     retraced: u64,
+    retraced_prefix: u64,
     invalid: u64,
     /// Generated frames whose samples served this frame.
     served_by: u32,
@@ -821,6 +822,7 @@ impl SequenceRenderer for Stbpt {
             reused: p.reused,
             reused_partially: p.partial,
             retraced: p.retraced,
+            retraced_from_prefix: p.retraced_prefix,
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
             light_subpaths_per_pixel: spp as f64 * p.served_by_light,
             filled: filled.pixels.len() as u64,

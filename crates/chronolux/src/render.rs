@@ -355,7 +355,7 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
             .and_then(serde_json::Value::as_u64)
             .unwrap_or(0),
     };
-    let progress = Progress::new(w, h, frames.len());
+    let progress = Progress::new(w, h, frames.len(), tech.capabilities().stateless);
     progress.say(format!(
         "rendering {} frame(s) of {} at {w}x{h}, method {}, {} thread(s) into {}",
         frames.len(),
@@ -411,9 +411,10 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         }
     }
     progress.say(format!(
-        "done: {} frame(s) in {:.1} s → {}",
+        "done: {} frame(s) in {:.1} s, {:.2} Mrays/s → {}",
         written.len(),
         summary.wall_s,
+        progress.rays as f64 / summary.wall_s.max(1e-9) / 1e6,
         exec.output.display()
     ));
     Ok(())
@@ -535,10 +536,18 @@ pub struct Progress {
     mp: MultiProgress,
     frames: ProgressBar,
     pixels: ProgressBar,
+    /// Whether each frame's rays are traced while it is rendered (a frame-by-frame method),
+    /// so that its ray rate is its rays over its time. A temporal method traces samples for
+    /// the frames after the one it outputs (and serves a frame from samples made while
+    /// rendering earlier ones): its per-frame rate would be meaningless (a frame served
+    /// entirely from earlier steps takes no time), so only the run's rate is printed.
+    per_frame_rate: bool,
+    /// Ray queries of the frames finished so far.
+    rays: u64,
 }
 
 impl Progress {
-    pub fn new(w: u32, h: u32, n: usize) -> Self {
+    pub fn new(w: u32, h: u32, n: usize, per_frame_rate: bool) -> Self {
         let interactive = std::io::IsTerminal::is_terminal(&std::io::stderr());
         let mp = MultiProgress::with_draw_target(if interactive {
             ProgressDrawTarget::stderr()
@@ -560,6 +569,8 @@ impl Progress {
             mp,
             frames,
             pixels,
+            per_frame_rate,
+            rays: 0,
         }
     }
 
@@ -607,14 +618,20 @@ impl run::FrameSink for Progress {
         let out = f.output;
         let width = f.n.to_string().len();
         self.frames.inc(1);
+        let rays = out.stats.rays + out.stats.shadow_rays;
+        self.rays += rays;
+        let work = if self.per_frame_rate {
+            format!("{:.2} Mrays/s", rays as f64 / f.wall_s.max(1e-9) / 1e6)
+        } else {
+            format!("{:.2} M rays", rays as f64 / 1e6)
+        };
         self.say(format!(
-            "frame {} [{:>width$}/{}] t={:.3} s: {:.2} s, {:.2} Mrays/s{}",
+            "frame {} [{:>width$}/{}] t={:.3} s: {:.2} s, {work}{}",
             f.frame,
             f.k + 1,
             f.n,
             f.time_s,
             f.wall_s,
-            (out.stats.rays + out.stats.shadow_rays) as f64 / f.wall_s.max(1e-9) / 1e6,
             if out.invalid_samples > 0 {
                 format!(", {} NaN/Inf samples dropped", out.invalid_samples)
             } else {

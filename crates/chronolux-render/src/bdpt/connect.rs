@@ -77,16 +77,27 @@ pub fn skip_connect(
     t: usize,
     sampler: &mut PixelSampler,
 ) {
-    if t == 0 || t > camera.len() || s > light_len.max(usize::from(settings.path_strategies)) {
-        return;
-    }
-    if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::Light {
-        return;
-    }
-    if s == 1 && t > 1 {
+    if s == 1 && t > 1 && has_strategy(settings, light_len, camera, s, t) {
         sampler.next_1d();
         sampler.next_2d();
     }
+}
+
+/// Whether subpaths of these lengths have strategy (s, t) at all: the checks
+/// [`connect_with`] makes before it draws any number (shared with [`skip_connect`], so
+/// the two draw alike).
+fn has_strategy(
+    settings: &BdptSettings,
+    light_len: usize,
+    camera: &[Vertex],
+    s: usize,
+    t: usize,
+) -> bool {
+    if t == 0 || t > camera.len() || s > light_len.max(usize::from(settings.path_strategies)) {
+        return false;
+    }
+    // A camera subpath ending at infinity only serves s = 0.
+    !(t > 1 && s != 0 && camera[t - 1].kind == VertexKind::Light)
 }
 
 /// A strategy's contribution as [`connect_with`] reports it.
@@ -121,11 +132,7 @@ pub fn connect_with(
     stats: &mut Stats,
     visible: &mut dyn FnMut(&chronolux_core::geometry::Ray) -> bool,
 ) -> Option<Connection> {
-    if t == 0 || t > camera.len() || s > light.len().max(usize::from(settings.path_strategies)) {
-        return None;
-    }
-    // A camera subpath ending at infinity only serves s = 0.
-    if t > 1 && s != 0 && camera[t - 1].kind == VertexKind::Light {
+    if !has_strategy(settings, light.len(), camera, s, t) {
         return None;
     }
     let mut sampled: Option<Vertex> = None;

@@ -152,6 +152,37 @@ fn window_trace<'a>(
     }
 }
 
+/// The rays of a subpath regenerated in a window frame g from f's stream (light or
+/// camera): the first `n` are f's rays and give f's hits in g (the multi-frame masks), so
+/// they are answered with f's `hits` without a traversal; the others are traced in g.
+struct ReproducedPrefix<'h> {
+    hits: &'h [Option<Hit>],
+    n: usize,
+    next: usize,
+}
+
+impl<'h> ReproducedPrefix<'h> {
+    fn new(hits: &'h [Option<Hit>], n: usize) -> Self {
+        ReproducedPrefix { hits, n, next: 0 }
+    }
+
+    /// The answer to the walk's next ray.
+    fn trace(&mut self, scene_g: &FrameScene, ray: &Ray) -> Option<Hit> {
+        let i = self.next;
+        self.next += 1;
+        if i < self.n {
+            self.hits[i]
+        } else {
+            scene_g.intersect(ray)
+        }
+    }
+
+    /// Rays answered from f's hits (not traced, so not counted as g's rays).
+    fn answered(&self) -> u64 {
+        self.next.min(self.n) as u64
+    }
+}
+
 /// One view-independent entry at x1.
 pub(super) struct Entry {
     /// Light vertices of the strategy: s ≤ 1 does not depend on the light subpath.
@@ -756,28 +787,19 @@ impl Generation<'_> {
                 // Regenerated from the same stream: the rays of the reproduced prefix are
                 // f's rays with f's hits in g, answered without a traversal.
                 let mut l2 = ls0.clone();
-                let mut ray_index = 0usize;
-                let mut answered = 0u64;
-                let hits = &sc.light_hits;
+                // Ray i leaves vertex i and makes vertex i + 1: the first light_kept − 1
+                // rays made reproduced vertices.
+                let mut prefix =
+                    ReproducedPrefix::new(&sc.light_hits, light_kept.saturating_sub(1));
                 generate_light_subpath_with(
                     scene_g,
                     self.bdpt,
                     &mut l2,
                     &mut sc.light_g,
                     &mut out.stats[j],
-                    &mut |r| {
-                        let i = ray_index;
-                        ray_index += 1;
-                        // Ray i leaves vertex i and makes vertex i + 1.
-                        if i + 1 < light_kept {
-                            answered += 1;
-                            hits[i]
-                        } else {
-                            scene_g.intersect(r)
-                        }
-                    },
+                    &mut |r| prefix.trace(scene_g, r),
                 );
-                out.stats[j].rays -= answered;
+                out.stats[j].rays -= prefix.answered();
             }
             let same_camera = self.same_camera >> j & 1 == 1;
             if same_camera {
@@ -873,9 +895,7 @@ impl Generation<'_> {
                         cam
                     } else {
                         let mut c2 = cs0.clone();
-                        let hits = &sc.cam_hits;
-                        let mut ray_index = 0usize;
-                        let mut answered = 0u64;
+                        let mut prefix = ReproducedPrefix::new(&sc.cam_hits, kept);
                         generate_camera_subpath_with(
                             scene_g,
                             self.bdpt,
@@ -883,18 +903,9 @@ impl Generation<'_> {
                             &mut c2,
                             &mut sc.cam_g,
                             &mut out.stats[j],
-                            &mut |ray| {
-                                let i = ray_index;
-                                ray_index += 1;
-                                if i < kept {
-                                    answered += 1;
-                                    hits[i]
-                                } else {
-                                    scene_g.intersect(ray)
-                                }
-                            },
+                            &mut |ray| prefix.trace(scene_g, ray),
                         );
-                        out.stats[j].rays -= answered;
+                        out.stats[j].rays -= prefix.answered();
                         if self.shutter > 0.0 {
                             let d = scene_g.camera.generate_ray(raster).d;
                             around = self.trajectory(j, j, sc.cam_g.get(1), Some(d));

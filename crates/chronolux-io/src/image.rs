@@ -522,6 +522,9 @@ pub fn write_png_rgb8(path: impl AsRef<Path>, image: &Rgb8Image) -> Result<(), I
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
         enc.set_source_srgb(png::SrgbRenderingIntent::Perceptual);
+        // fdeflate's PNG-tuned DEFLATE: 1.0 ms per 256² frame against 13.5 ms for the
+        // default `Balanced`, for files 16 % larger (a rendered cornell-moving frame).
+        enc.set_compression(png::Compression::Fast);
         let mut writer = enc.write_header().map_err(png_enc_to_io)?;
         writer.write_image_data(bytes).map_err(png_enc_to_io)?;
         writer.finish().map_err(png_enc_to_io)

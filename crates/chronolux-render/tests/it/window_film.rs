@@ -233,3 +233,36 @@ fn untouched_frames_and_tiles_are_zero() {
     assert_eq!(film.resident_bytes(), 0);
     assert_eq!(FILM_TILE, 64);
 }
+
+#[test]
+fn filtered_and_sparse_batches_match_one_by_one_addition() {
+    // `add_batch_where` equals adding the kept contributions one at a time, on both of
+    // its grouping paths: the counting sort (the workload's 3-frame batches) and the sort
+    // for a batch spread over a frame range far wider than itself (frames 0 and 10 000).
+    let mut work = workload(5);
+    let mut rng = Pcg32::new(9, 1);
+    for (batch, _) in work.iter_mut().step_by(5) {
+        for c in batch.iter_mut() {
+            if rng.next_f32() < 0.2 {
+                c.frame += 10_000;
+            }
+        }
+    }
+    let keep = |f: u32| f % 2 == 0 || f >= 10_000;
+    let mut naive = Naive::default();
+    let mut film = WindowFilm::new(W, H);
+    for (batch, _) in &work {
+        for c in batch.iter().filter(|c| keep(c.frame)) {
+            naive.add(c);
+        }
+        film.add_batch_where(batch, keep);
+    }
+    let frames = film.open_frames();
+    assert_eq!(frames, naive.frames.keys().copied().collect::<Vec<_>>());
+    assert!(frames.iter().any(|&f| f >= 10_000) && frames.iter().all(|&f| keep(f)));
+    for f in frames {
+        let (a, aw) = film.finish(f, 0.5);
+        let (b, bw) = naive.finish(f, 0.5);
+        assert_eq!(bits(&a, &aw), bits(&b, &bw), "frame {f}");
+    }
+}

@@ -1198,15 +1198,12 @@ impl Stbpt {
                 out
             });
             // Landings in frames outside the render list (a grid frame's) only count.
-            let listed = |b: &[Contribution]| -> Vec<Contribution> {
-                b.iter().filter(|c| in_list(c.frame)).copied().collect()
-            };
             for r in &results {
-                film.add_batch(&listed(&r.batch));
-                film_sq.add_batch(&listed(&r.squares));
-                film_splat.add_batch(&listed(&r.splats));
+                film.add_batch_where(&r.batch, &in_list);
+                film_sq.add_batch_where(&r.squares, &in_list);
+                film_splat.add_batch_where(&r.splats, &in_list);
                 for (film, batch) in film_blur.iter_mut().zip(&r.blur) {
-                    film.add_batch(&listed(batch));
+                    film.add_batch_where(batch, &in_list);
                 }
                 counts.add(&r.counts);
                 for (a, b) in stats.iter_mut().zip(&r.stats) {

@@ -1199,11 +1199,11 @@ impl Stbpt {
             });
             // Landings in frames outside the render list (a grid frame's) only count.
             for r in &results {
-                film.add_batch_where(&r.batch, &in_list);
-                film_sq.add_batch_where(&r.squares, &in_list);
-                film_splat.add_batch_where(&r.splats, &in_list);
+                film.add_batch_where(&r.batch, in_list);
+                film_sq.add_batch_where(&r.squares, in_list);
+                film_splat.add_batch_where(&r.splats, in_list);
                 for (film, batch) in film_blur.iter_mut().zip(&r.blur) {
-                    film.add_batch_where(batch, &in_list);
+                    film.add_batch_where(batch, in_list);
                 }
                 counts.add(&r.counts);
                 for (a, b) in stats.iter_mut().zip(&r.stats) {

@@ -248,7 +248,7 @@ fn filtered_and_sparse_batches_match_one_by_one_addition() {
             }
         }
     }
-    let keep = |f: u32| f % 2 == 0 || f >= 10_000;
+    let keep = |f: u32| f.is_multiple_of(2) || f >= 10_000;
     let mut naive = Naive::default();
     let mut film = WindowFilm::new(W, H);
     for (batch, _) in &work {

@@ -417,7 +417,7 @@ fn same_light(a: &Light, b: &Light) -> bool {
 
 /// Placement, projection and image size, bitwise.
 fn same_camera(a: &Camera, b: &Camera) -> bool {
-    let projection = match (a.projection, b.projection) {
+    let projection = match (a.projection(), b.projection()) {
         (
             Projection::Perspective {
                 yfov,
@@ -437,7 +437,7 @@ fn same_camera(a: &Camera, b: &Camera) -> bool {
         _ => false,
     };
     projection
-        && a.world_from_camera.bit_eq(&b.world_from_camera)
+        && a.world_from_camera().bit_eq(&b.world_from_camera())
         && a.width == b.width
         && a.height == b.height
 }

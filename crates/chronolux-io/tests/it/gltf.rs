@@ -1275,7 +1275,7 @@ fn an_animated_camera_moves_as_its_keys_say() {
     .unwrap();
     assert!(b.camera_may_move());
     let (f0, f1) = (b.build(0.0), b.build(0.5));
-    let w = f1.camera.world_from_camera;
+    let w = f1.camera.world_from_camera();
     let p = Vec3::from(w.translation);
     assert!((p - Vec3::new(0.5, 0.25, 2.5)).length() < 1e-5, "{p:?}");
     let fwd = w.transform_vector3(Vec3::new(0.0, 0.0, -1.0));

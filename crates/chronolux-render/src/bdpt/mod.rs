@@ -298,7 +298,7 @@ pub fn generate_camera_subpath_with<T: FnMut(&Ray) -> Option<Hit>>(
     }
     let cam = &scene.camera;
     let ray = cam.generate_ray(raster);
-    let ortho = matches!(cam.projection, Projection::Orthographic { .. });
+    let ortho = matches!(cam.projection(), Projection::Orthographic { .. });
     let (_, pdf_dir) = cam.pdf_we(ray.d);
     path.push(Vertex::camera(ray.o, Rgb::ONE, ortho));
     random_walk(

@@ -162,7 +162,9 @@ impl Vertex {
     /// purely specular BSDF, not to a directional light, not to an orthographic camera.
     pub fn is_connectible(&self, scene: &FrameScene) -> bool {
         match self.kind {
-            VertexKind::Camera => matches!(scene.camera.projection, Projection::Perspective { .. }),
+            VertexKind::Camera => {
+                matches!(scene.camera.projection(), Projection::Perspective { .. })
+            }
             VertexKind::Light => self
                 .light
                 .is_some_and(|l| !matches!(scene.lights[l], Light::Directional { .. })),

@@ -95,7 +95,7 @@ impl Generation<'_> {
         let all = self.mfa.all_frames();
         let (scene_f, scene_g) = (&self.scenes[jf], &self.scenes[j]);
         let cam_g = &scene_g.camera;
-        if !matches!(cam_g.projection, Projection::Perspective { .. }) {
+        if !matches!(cam_g.projection(), Projection::Perspective { .. }) {
             return Landing::Missed;
         }
         let eye = cam_g.position();
@@ -104,7 +104,7 @@ impl Generation<'_> {
             // Escaped camera ray (or an environment vertex): lands where its direction
             // projects; reused when g's camera is f's and the ray escapes in g too (then
             // g's camera ray is the same ray).
-            let same_camera = cam_g.world_from_camera == scene_f.camera.world_from_camera;
+            let same_camera = cam_g.world_from_camera() == scene_f.camera.world_from_camera();
             return match walk
                 .escape
                 .and_then(|r| cam_g.project(eye + r.d.normalize()))
@@ -209,7 +209,7 @@ impl Generation<'_> {
         let (jf, n) = (self.jf, self.scenes.len());
         let scene_f = &self.scenes[jf];
         let pinhole =
-            |s: &FrameScene| matches!(s.camera.projection, Projection::Perspective { .. });
+            |s: &FrameScene| matches!(s.camera.projection(), Projection::Perspective { .. });
         let (w, h) = (scene_f.camera.width, scene_f.camera.height);
         // The frames whose view may differ from f's.
         let mut test: FrameMask = 0;

@@ -322,15 +322,13 @@ impl WindowFilm {
             start.clear();
             start.resize(slots + 1, 0);
             for c in batch {
-                let s = if keep(c.frame) {
-                    (c.frame - lo) as usize * n_tiles + self.tile_of(c.pixel) as usize
-                } else {
-                    SKIP as usize
-                };
-                if s != SKIP as usize {
+                if keep(c.frame) {
+                    let s = (c.frame - lo) as usize * n_tiles + self.tile_of(c.pixel) as usize;
                     start[s + 1] += 1;
+                    slot_of.push(s as u32);
+                } else {
+                    slot_of.push(SKIP);
                 }
-                slot_of.push(s as u32);
             }
             for s in 0..slots {
                 start[s + 1] += start[s];

@@ -5,16 +5,7 @@
 #        SCENES=<../shared/scenes> RDOLLY=<dolly 64² refs> ab.sh OUT ROUNDS
 set -euo pipefail
 OUT=$1; ROUNDS=${2:-3}; mkdir -p "$OUT"
-q() { # name bin args...
-  local name=$1 bin=$2; shift 2
-  "$bin" bench quality "$@" --target-flip 0.05 --json > "$OUT/$name.json" 2> "$OUT/$name.err"
-  python3 - "$OUT/$name.json" "$name" <<'PY'
-import json, sys
-d = json.load(open(sys.argv[1]))
-for l in d["results"][0]["levels"]:
-    print(f'{sys.argv[2]:28s} effort {l["effort"]:3d} CPU {l["cpu_s"]:7.2f} s  FLIP {l["flip_mean"]:.4f}  relMSE {l["relmse_mean"]:.4e}  flicker {l["flicker"]:.4f}')
-PY
-}
+. "$(dirname "$0")/../../scripts/bench/quality_q.sh"
 for r in $(seq 1 "$ROUNDS"); do
   for ab in A B; do
     bin=${!ab}

@@ -1,20 +1,11 @@
 #!/usr/bin/env bash
 # A/B of stbpt without (A) and with (B) the shift, interleaved, ROUNDS rounds, on
 # cornell-moving (256², frames 0–7, N = 2, K = 8, max depth 8, 2 threads) with OIDN at
-# 1 spp and without at 4 spp, and on the rough demo (64², 4 spp, 1 thread).
+# 1 spp and without at 4 spp.
 # usage: A=<before> B=<after> CM=<cornell-moving.glb> RCM=<its 256² refs> ab.sh OUT ROUNDS
 set -euo pipefail
 OUT=$1; ROUNDS=${2:-3}; mkdir -p "$OUT"
-q() { # name bin args...
-  local name=$1 bin=$2; shift 2
-  "$bin" bench quality "$@" --target-flip 0.05 --json > "$OUT/$name.json" 2> "$OUT/$name.err"
-  python3 - "$OUT/$name.json" "$name" <<'PY'
-import json, sys
-d = json.load(open(sys.argv[1]))
-for l in d["results"][0]["levels"]:
-    print(f'{sys.argv[2]:28s} effort {l["effort"]:3d} CPU {l["cpu_s"]:7.2f} s  FLIP {l["flip_mean"]:.4f}  relMSE {l["relmse_mean"]:.4e}  flicker {l["flicker"]:.4f}')
-PY
-}
+. "$(dirname "$0")/../../scripts/bench/quality_q.sh"
 for r in $(seq 1 "$ROUNDS"); do for ab in A B; do bin=${!ab}
   q "cm256-oidn-$ab$r" "$bin" "$CM" --frames 0..8 --reference "$RCM" --max-depth 8 --threads 2 \
     --denoise --method stbpt --set window=8 --set interleave=2 --start-effort 1 --max-effort 1

@@ -75,14 +75,21 @@ fn run_cli() {
         Ok(a) => a,
         Err(e) if !e.use_stderr() => e.exit(), // --help, --version: stdout, exit 0
         Err(e) => {
-            // Usage errors keep the one-line contract of every other error.
+            // Usage errors keep the one-line contract of every other error: clap's first
+            // paragraph on one line (a missing argument's name is on the lines after
+            // "the following required arguments were not provided:").
             let text = e.to_string();
             let first = text
                 .lines()
-                .next()
-                .unwrap_or("error: invalid arguments")
-                .trim();
-            let first = first.strip_prefix("error: ").unwrap_or(first);
+                .map(str::trim)
+                .take_while(|l| !l.is_empty())
+                .collect::<Vec<_>>()
+                .join(" ");
+            let first = if first.is_empty() {
+                "invalid arguments"
+            } else {
+                first.strip_prefix("error: ").unwrap_or(&first)
+            };
             eprintln!("error: {first} (see --help)");
             std::process::exit(2);
         }

@@ -174,6 +174,13 @@ pub struct RenderArgs {
     /// layer ViewLayer.Noisy Image. Needs a build with `--features oidn` (README).
     #[arg(long)]
     pub denoise: bool,
+    /// Open Image Denoise's quality with --denoise: `high` (its default), `balanced` (the
+    /// same network as `high` on a CPU) or `fast` (a smaller network: about half the
+    /// filter's CPU time, a higher error at equal samples; it reached equal HDR-FLIP with
+    /// 10 % less CPU on the peers' scene on an AMD EPYC: BENCHMARKS.md, "Issue 17: the
+    /// denoiser's cost").
+    #[arg(long, value_enum, value_name = "QUALITY", requires = "denoise")]
+    pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
     /// Render one segment of a farm plan (`chronolux plan`, `chronolux farm`): the plan
     /// fixes every setting, so only --segment, --output, --threads, --resume and
     /// --no-preview may be given with it.

@@ -48,6 +48,9 @@ pub struct RunConfig {
     /// Denoise with Open Image Denoise (needs the `oidn` build feature).
     #[serde(default)]
     pub denoise: bool,
+    /// The denoiser's quality (when `denoise`).
+    #[serde(default)]
+    pub denoise_quality: crate::denoise::DenoiseQuality,
 }
 
 /// A `--config` file: a `run.json` (its `settings` are a [`RunConfig`]), a `RunConfig`
@@ -75,6 +78,7 @@ pub struct PartialRun {
     pub exposure: Option<f32>,
     pub passes: Option<chronolux_render::aov::PassSet>,
     pub denoise: Option<bool>,
+    pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
     pub view: Option<chronolux_io::image::View>,
     /// Recorded in run.json (the automatic exposure found), not a setting: a replay
     /// measures it again, identically.

@@ -18,13 +18,39 @@ pub fn unavailable() -> Option<&'static str> {
     )
 }
 
+/// Open Image Denoise's filter quality (`--denoise-quality`): its networks by name.
+#[derive(
+    Clone,
+    Copy,
+    Debug,
+    Default,
+    PartialEq,
+    Eq,
+    clap::ValueEnum,
+    serde::Serialize,
+    serde::Deserialize,
+)]
+#[serde(rename_all = "kebab-case")]
+pub enum DenoiseQuality {
+    /// OIDN's default and best network.
+    #[default]
+    High,
+    /// Meant for real-time use; the same network as `high` on a CPU device.
+    Balanced,
+    /// A smaller network: about half the filter's CPU, a higher error at equal samples.
+    /// On the peers' scene, stbpt + OIDN reached HDR-FLIP 0.08 with 10 % less CPU with it
+    /// on an AMD EPYC, where the filter takes 7.7 µs of CPU per pixel (BENCHMARKS.md,
+    /// "Issue 17: the denoiser's cost").
+    Fast,
+}
+
 fn flat3(v: impl Iterator<Item = [f32; 3]>) -> Vec<f32> {
     v.flatten().collect()
 }
 
 /// The beauty `pixels` denoised with the albedo and normal passes of `aovs`.
 #[cfg(feature = "oidn")]
-pub fn denoise(pixels: &[Rgb], aovs: &Aovs) -> Result<Vec<Rgb>, String> {
+pub fn denoise(pixels: &[Rgb], aovs: &Aovs, quality: DenoiseQuality) -> Result<Vec<Rgb>, String> {
     let (w, h) = (aovs.width as usize, aovs.height as usize);
     if pixels.len() != w * h || aovs.albedo.len() != w * h || aovs.normal.len() != w * h {
         return Err("denoise: the beauty, albedo and normal differ in size".into());
@@ -46,6 +72,11 @@ pub fn denoise(pixels: &[Rgb], aovs: &Aovs) -> Result<Vec<Rgb>, String> {
         oidn::RayTracing::try_new(device).map_err(|e| format!("Open Image Denoise: {e:?}"))?;
     filter
         .hdr(true)
+        .filter_quality(match quality {
+            DenoiseQuality::High => oidn::Quality::High,
+            DenoiseQuality::Balanced => oidn::Quality::Balanced,
+            DenoiseQuality::Fast => oidn::Quality::Fast,
+        })
         .image_dimensions(w, h)
         .albedo_normal(&albedo, &normal);
     filter
@@ -60,8 +91,8 @@ pub fn denoise(pixels: &[Rgb], aovs: &Aovs) -> Result<Vec<Rgb>, String> {
 /// Without the `oidn` feature there is no denoiser; [`unavailable`] stops `--denoise`
 /// before any rendering, so this is never reached.
 #[cfg(not(feature = "oidn"))]
-pub fn denoise(pixels: &[Rgb], aovs: &Aovs) -> Result<Vec<Rgb>, String> {
-    let _ = (pixels, aovs, flat3(std::iter::empty()));
+pub fn denoise(pixels: &[Rgb], aovs: &Aovs, quality: DenoiseQuality) -> Result<Vec<Rgb>, String> {
+    let _ = (pixels, aovs, quality, flat3(std::iter::empty()));
     Err(unavailable().unwrap_or_default().to_string())
 }
 

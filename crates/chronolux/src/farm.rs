@@ -316,6 +316,7 @@ pub fn render_segment(args: RenderArgs) -> Result<()> {
         ("--exposure", args.exposure.is_some()),
         ("--passes", args.passes.is_some()),
         ("--denoise", args.denoise),
+        ("--denoise-quality", args.denoise_quality.is_some()),
         ("--view", args.view.is_some()),
     ]
     .into_iter()

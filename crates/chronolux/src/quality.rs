@@ -99,6 +99,9 @@ pub struct QualityArgs {
     /// seconds are counted. Needs a build with the `oidn` feature.
     #[arg(long)]
     pub denoise: bool,
+    /// Open Image Denoise's quality with --denoise (as `render --denoise-quality`).
+    #[arg(long, value_enum, value_name = "QUALITY", requires = "denoise")]
+    pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
     /// Print the result as one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -107,17 +110,17 @@ pub struct QualityArgs {
 /// Keeps each frame's image, denoised first when asked. The denoising happens in
 /// [`FrameSink::frame`], inside the run loop's timing (its CPU seconds are the run's).
 struct ScoredSink {
-    denoise: bool,
+    denoise: Option<crate::denoise::DenoiseQuality>,
     frames: Vec<(u32, Vec<chronolux_core::color::Rgb>)>,
 }
 
 impl FrameSink for ScoredSink {
     fn frame(&mut self, f: &FinishedFrame) -> Result<(), chronolux_render::run::SinkError> {
-        let pixels = if self.denoise {
+        let pixels = if let Some(quality) = self.denoise {
             let aovs = f
                 .aovs
                 .ok_or("bench quality --denoise: the run made no albedo/normal passes")?;
-            crate::denoise::denoise(&f.output.pixels, aovs)?
+            crate::denoise::denoise(&f.output.pixels, aovs, quality)?
         } else {
             f.output.pixels.clone()
         };
@@ -201,6 +204,9 @@ pub struct QualityResult {
     pub criterion: String,
     /// Whether every frame was denoised (Open Image Denoise) before scoring.
     pub denoise: bool,
+    /// The denoiser's quality, when denoised.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
     /// Frames rendered at each level.
     pub frames: Vec<u32>,
     /// Frames scored (`--measure`; all rendered frames by default); flicker is over
@@ -377,7 +383,9 @@ pub fn run(args: QualityArgs) -> Result<()> {
                 FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
             let mut source = FrameSource::new(builder, args.fps, rendered.clone());
             let mut sink = ScoredSink {
-                denoise: args.denoise,
+                denoise: args
+                    .denoise
+                    .then(|| args.denoise_quality.unwrap_or_default()),
                 frames: Vec::new(),
             };
             // A denoised run makes the albedo and normal passes the denoiser takes.
@@ -499,6 +507,9 @@ pub fn run(args: QualityArgs) -> Result<()> {
         baseline: args.baseline.clone(),
         criterion: args.criterion.clone(),
         denoise: args.denoise,
+        denoise_quality: args
+            .denoise
+            .then(|| args.denoise_quality.unwrap_or_default()),
         frames: frames.clone(),
         measured: measured.clone(),
         target_flip: first,
@@ -552,10 +563,9 @@ pub fn markdown(r: &QualityResult) -> String {
         r.baseline
             .as_ref()
             .map_or(String::new(), |b| format!(" vs {b}")),
-        if r.denoise {
-            ", every frame denoised (OIDN)"
-        } else {
-            ""
+        match r.denoise_quality {
+            Some(q) if r.denoise => format!(", every frame denoised (OIDN, quality {q:?})"),
+            _ => String::new(),
         },
         r.frames,
         r.measured,

@@ -189,6 +189,10 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         None => prev.passes.unwrap_or_default(),
     };
     let denoise = args.denoise || prev.denoise.unwrap_or(false);
+    let denoise_quality = args
+        .denoise_quality
+        .or(prev.denoise_quality)
+        .unwrap_or_default();
     if denoise && let Some(why) = crate::denoise::unavailable() {
         bail!("{why}");
     }
@@ -272,6 +276,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         exposure,
         passes,
         denoise,
+        denoise_quality,
         view,
     };
     Ok((config, input))
@@ -370,7 +375,7 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         exposure,
         view: config.view,
         resume: exec.resume,
-        denoise: config.denoise,
+        denoise: config.denoise.then_some(config.denoise_quality),
         keep_passes: asked,
         owned: exec.segment.as_ref().map(|s| s.owned.clone()),
         warm_up_until: exec
@@ -433,8 +438,8 @@ pub struct DiskSink<'a> {
     /// A stateful technique's segment renders (without writing) every frame before this
     /// one: its history.
     pub warm_up_until: Option<u32>,
-    /// Denoise the beauty (the noisy one becomes a layer).
-    pub denoise: bool,
+    /// Denoise the beauty with this quality (the noisy one becomes a layer).
+    pub denoise: Option<crate::denoise::DenoiseQuality>,
     /// The passes the user asked for (a denoised render computes albedo and normal even
     /// when they were not asked for, and does not write them then).
     pub keep_passes: PassSet,
@@ -492,11 +497,11 @@ impl run::FrameSink for DiskSink<'_> {
                     self.keep_passes.indirect,
                 ));
             }
-            if self.denoise {
+            if let Some(quality) = self.denoise {
                 let aovs = f.aovs.ok_or_else(|| {
                     format!("frame {}: no albedo/normal to denoise with", f.frame)
                 })?;
-                let clean = crate::denoise::denoise(&image.pixels, aovs)
+                let clean = crate::denoise::denoise(&image.pixels, aovs, quality)
                     .map_err(|e| format!("frame {}: {e}", f.frame))?;
                 for (c, name) in ["R", "G", "B"].iter().enumerate() {
                     layers.push((

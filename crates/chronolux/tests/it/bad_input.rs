@@ -228,8 +228,16 @@ fn usage_errors_are_one_line() {
     fails(&render_demo(&["--max-depth", "0"]), &["--max-depth"]);
     // A missing required argument is named on the line (clap puts it on the next one).
     fails(
+        &render_demo(&["--denoise-quality", "fast"]),
+        &["not provided", "--denoise"],
+    );
+    fails(
         &render_demo(&["--plan", "plan.json"]),
         &["not provided", "--segment"],
+    );
+    fails(
+        &render_demo(&["--denoise", "--denoise-quality", "fastest"]),
+        &["fastest", "--denoise-quality"],
     );
 }
 

@@ -280,18 +280,15 @@ fn denoise_lowers_the_error_and_keeps_the_noisy_image() {
     ];
     args.extend(common);
     ok(&run(&args));
-    let mut args = vec![
-        "render",
-        "--method",
-        "stbpt",
-        "--spp",
-        "4",
-        "--denoise",
-        "--output",
-        dir.to_str().unwrap(),
-    ];
-    args.extend(common);
-    ok(&run(&args));
+    // The README's route: stbpt at 4 spp, denoised (`extra`: more flags).
+    let denoised = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec!["render", "--method", "stbpt", "--spp", "4", "--denoise"];
+        args.extend(extra);
+        args.extend(["--output", out.to_str().unwrap()]);
+        args.extend(common);
+        ok(&run(&args));
+    };
+    denoised(&dir, &[]);
     let exr = dir.join("frame_0004.exr");
     let clean = read_exr(&exr).unwrap().pixels;
     let r = read_exr(reference.join("frame_0004.exr")).unwrap().pixels;
@@ -311,5 +308,30 @@ fn denoise_lowers_the_error_and_keeps_the_noisy_image() {
     assert!(
         e_clean < 0.5 * e_noisy,
         "denoised {e_clean} vs noisy {e_noisy}"
+    );
+
+    // `--denoise-quality fast`: the same noisy image (the quality is the filter's only),
+    // filtered by another network (a different image), which denoises too (same bound),
+    // and run.json says which.
+    let fast_dir = temp_dir("denoise-fast");
+    denoised(&fast_dir, &["--denoise-quality", "fast"]);
+    let fast_exr = fast_dir.join("frame_0004.exr");
+    let fast = read_exr(&fast_exr).unwrap().pixels;
+    for name in ["R", "G", "B"] {
+        let layer = format!("ViewLayer.Noisy Image.{name}");
+        assert_eq!(
+            read_exr_channel(&fast_exr, &layer).unwrap().unwrap(),
+            ch(&layer),
+            "{layer}"
+        );
+    }
+    assert_ne!(fast, clean, "fast and high gave the same image");
+    let e_fast = chronolux_core::metrics::rel_mse(&fast, &r);
+    assert!(e_fast < 0.5 * e_noisy, "fast {e_fast} vs noisy {e_noisy}");
+    let run_json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fast_dir.join("run.json")).unwrap()).unwrap();
+    assert_eq!(
+        run_json["settings"]["denoise_quality"], "fast",
+        "{run_json}"
     );
 }

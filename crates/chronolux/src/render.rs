@@ -672,6 +672,7 @@ fn check_resumable(
         "exposure",
         "passes",
         "denoise",
+        "denoise_quality",
         "view",
         "animation",
         "camera",

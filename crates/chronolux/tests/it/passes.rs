@@ -334,4 +334,17 @@ fn denoise_lowers_the_error_and_keeps_the_noisy_image() {
         run_json["settings"]["denoise_quality"], "fast",
         "{run_json}"
     );
+    // Resuming that folder with the other quality would mix two denoisers' frames.
+    let mut args = vec![
+        "render",
+        "--method",
+        "stbpt",
+        "--spp",
+        "4",
+        "--denoise",
+        "--resume",
+    ];
+    args.extend(["--output", fast_dir.to_str().unwrap()]);
+    args.extend(common);
+    fails(&run(&args), &["--resume", "denoise_quality"]);
 }

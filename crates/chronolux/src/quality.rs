@@ -312,6 +312,10 @@ pub fn run(args: QualityArgs) -> Result<()> {
     {
         bail!("{why}");
     }
+    // The denoiser's quality when every frame is denoised.
+    let denoise = args
+        .denoise
+        .then(|| args.denoise_quality.unwrap_or_default());
     crate::render::set_threads(args.threads)?;
     crate::render::check_fps_and_depth(args.fps, args.max_depth)?;
     let frames = parse_frames(&args.frames)?;
@@ -383,9 +387,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
                 FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
             let mut source = FrameSource::new(builder, args.fps, rendered.clone());
             let mut sink = ScoredSink {
-                denoise: args
-                    .denoise
-                    .then(|| args.denoise_quality.unwrap_or_default()),
+                denoise,
                 frames: Vec::new(),
             };
             // A denoised run makes the albedo and normal passes the denoiser takes.
@@ -507,9 +509,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
         baseline: args.baseline.clone(),
         criterion: args.criterion.clone(),
         denoise: args.denoise,
-        denoise_quality: args
-            .denoise
-            .then(|| args.denoise_quality.unwrap_or_default()),
+        denoise_quality: denoise,
         frames: frames.clone(),
         measured: measured.clone(),
         target_flip: first,
@@ -563,10 +563,9 @@ pub fn markdown(r: &QualityResult) -> String {
         r.baseline
             .as_ref()
             .map_or(String::new(), |b| format!(" vs {b}")),
-        match r.denoise_quality {
-            Some(q) if r.denoise => format!(", every frame denoised (OIDN, quality {q:?})"),
-            _ => String::new(),
-        },
+        r.denoise_quality.map_or(String::new(), |q| format!(
+            ", every frame denoised (OIDN, quality {q:?})"
+        )),
         r.frames,
         r.measured,
         r.criterion

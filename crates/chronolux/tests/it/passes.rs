@@ -286,9 +286,9 @@ fn denoise_lowers_the_error_and_keeps_the_noisy_image() {
         args.extend(extra);
         args.extend(["--output", out.to_str().unwrap()]);
         args.extend(common);
-        ok(&run(&args));
+        run(&args)
     };
-    denoised(&dir, &[]);
+    ok(&denoised(&dir, &[]));
     let exr = dir.join("frame_0004.exr");
     let clean = read_exr(&exr).unwrap().pixels;
     let r = read_exr(reference.join("frame_0004.exr")).unwrap().pixels;
@@ -314,7 +314,7 @@ fn denoise_lowers_the_error_and_keeps_the_noisy_image() {
     // filtered by another network (a different image), which denoises too (same bound),
     // and run.json says which.
     let fast_dir = temp_dir("denoise-fast");
-    denoised(&fast_dir, &["--denoise-quality", "fast"]);
+    ok(&denoised(&fast_dir, &["--denoise-quality", "fast"]));
     let fast_exr = fast_dir.join("frame_0004.exr");
     let fast = read_exr(&fast_exr).unwrap().pixels;
     for name in ["R", "G", "B"] {
@@ -335,16 +335,8 @@ fn denoise_lowers_the_error_and_keeps_the_noisy_image() {
         "{run_json}"
     );
     // Resuming that folder with the other quality would mix two denoisers' frames.
-    let mut args = vec![
-        "render",
-        "--method",
-        "stbpt",
-        "--spp",
-        "4",
-        "--denoise",
-        "--resume",
-    ];
-    args.extend(["--output", fast_dir.to_str().unwrap()]);
-    args.extend(common);
-    fails(&run(&args), &["--resume", "denoise_quality"]);
+    fails(
+        &denoised(&fast_dir, &["--resume"]),
+        &["--resume", "denoise_quality"],
+    );
 }

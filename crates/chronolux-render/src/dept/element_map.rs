@@ -607,17 +607,28 @@ pub fn deposit_photons(
     seed: u64,
 ) -> FramePhotons {
     let mut out = FramePhotons::new(mesh.element_count());
-    deposit_more_photons(scene, mesh, indices, seed, &mut out);
+    deposit_more_photons(scene, mesh, indices, seed, None, &mut out);
     out
 }
 
+/// The most scattering events a deposited photon may have had for paths of at most
+/// `max_depth` segments from the camera (Mitsuba's `max_depth`) when its surface is seen
+/// straight from the camera: the eye's one segment plus the photon's `bounces + 1` make
+/// `bounces + 2`. `None`: unlimited.
+pub fn max_photon_bounces(max_depth: Option<u32>) -> Option<u32> {
+    max_depth.map(|d| d.saturating_sub(2))
+}
+
 /// Adds photons `indices` to `out` (the photon total grows by their number), in
-/// photon-index order: depositing `a..b` then `b..c` gives exactly `a..c`'s sums.
+/// photon-index order: depositing `a..b` then `b..c` gives exactly `a..c`'s sums. Hits
+/// after more than `max_bounces` scattering events are left out
+/// ([`max_photon_bounces`]).
 pub fn deposit_more_photons(
     scene: &FrameScene,
     mesh: &ElementMesh,
     indices: std::ops::Range<u64>,
     seed: u64,
+    max_bounces: Option<u32>,
     out: &mut FramePhotons,
 ) {
     let photons = indices.end.saturating_sub(indices.start);
@@ -628,6 +639,11 @@ pub fn deposit_more_photons(
     while lo < indices.end {
         let hi = (lo + BATCH).min(indices.end);
         let (hits, stats) = trace_photons(scene, lo..hi, seed, |h: &PhotonHit| {
+            // Photons past the depth limit carry light of longer paths: not deposited
+            // (they still count as emitted, so the estimate stays per emitted photon).
+            if max_bounces.is_some_and(|m| h.bounces > m) {
+                return None;
+            }
             let e = mesh.locate(h.tri, h.b1, h.b2).element;
             let kind = if !h.is_indirect() {
                 0u8

@@ -45,6 +45,10 @@ pub struct DeptSettings {
     pub max_glossy: u32,
     /// Filtering of the element estimates.
     pub filter: Filter,
+    /// Longest path in segments from the camera (`--max-depth`, Mitsuba's `max_depth`):
+    /// photons of at most `max_depth − 2` scattering events are deposited and the eye
+    /// pass stops at the same depth ([`view`], "Path depth"). `None` (default): unlimited.
+    pub max_depth: Option<u32>,
     /// Seed of the photon and camera streams. Default 0.
     pub seed: u64,
 }
@@ -59,6 +63,7 @@ impl Default for DeptSettings {
             max_specular_depth: 8,
             max_glossy: 2,
             filter: Filter::None,
+            max_depth: None,
             seed: 0,
         }
     }
@@ -149,6 +154,7 @@ impl Dept {
                 &mesh,
                 base + done..base + total,
                 s.seed,
+                element_map::max_photon_bounces(s.max_depth),
                 &mut photons,
             );
             let (ind, si) =
@@ -257,6 +263,7 @@ pub fn render_view(
         caustic,
         max_specular_depth: settings.max_specular_depth,
         max_glossy: settings.max_glossy,
+        max_depth: settings.max_depth,
     };
     render_camera_rays(&view, scene, frame, settings.spp, settings.seed, progress)
 }

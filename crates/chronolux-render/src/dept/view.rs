@@ -31,6 +31,18 @@
 //! weight already divides by the lobe's selection probability, so the delta and the
 //! non-delta parts add up without double counting). At most `max_specular_depth` bounces
 //! (delta and glossy) are followed.
+//!
+//! ## Path depth
+//! With `max_depth` = D (segments from the camera, as the path tracer's and Mitsuba's
+//! `max_depth`), a vertex reached after e segments adds emission only if e ≤ D, its light
+//! sample and BSDF-sampled emission only if e + 1 ≤ D, and the elements only if e + 2 ≤ D
+//! (the shortest photon path to it, light → surface → here, has two segments). The
+//! elements hold photons of at most D − 2 scattering events
+//! ([`super::element_map::max_photon_bounces`]), which is exact for a surface seen
+//! straight from the camera (e = 1); seen through e − 1 delta or glossy bounces it lets
+//! paths of up to D + e − 1 segments in, so a depth-limited render is exact except in
+//! mirrors, glass and glossy reflections, where it keeps up to e − 1 more bounces of
+//! light than the limit (elements per photon depth would be needed for those).
 
 use super::element_map::ElementMesh;
 use super::reconstruct::ElementSolution;
@@ -59,6 +71,9 @@ pub struct DeptView<'a> {
     /// Glossy vertices a path passes before the elements are read as uniform there
     /// (0: the flat reading at every non-delta surface).
     pub max_glossy: u32,
+    /// Longest path in segments from the camera (Mitsuba's `max_depth`); `None`:
+    /// unlimited. See the module documentation, "Path depth".
+    pub max_depth: Option<u32>,
 }
 
 /// True when `bsdf` has a non-delta lobe other than the Lambertian one (a rough
@@ -108,7 +123,19 @@ impl DeptView<'_> {
         // A sky (light at infinity): light samples alone are noisy for it at diffuse
         // surfaces, so direct light there is MIS of a light sample and the BSDF sample.
         let sky = scene.environment_light.is_some();
-        for bounce in 0..=self.max_specular_depth {
+        // Segments a path may still have after the vertex reached by `bounce + 1` of them.
+        let room = |bounce: u32| {
+            self.max_depth
+                .map_or(u32::MAX, |d| d.saturating_sub(bounce + 1))
+        };
+        let last = match self.max_depth {
+            Some(d) => self.max_specular_depth.min(d.saturating_sub(1)),
+            None => self.max_specular_depth,
+        };
+        if self.max_depth == Some(0) {
+            return l;
+        }
+        for bounce in 0..=last {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray) else {
                 if let Some(r) = reach.as_deref_mut() {
@@ -150,9 +177,8 @@ impl DeptView<'_> {
             let u_lobe = sampler.next_1d();
             let u_dir = sampler.next_2d();
             // Continue through this glossy surface, or read the elements here.
-            let glossy =
-                is_glossy(&bsdf) && scattered < self.max_glossy && bounce < self.max_specular_depth;
-            if bsdf.has_non_delta() {
+            let glossy = is_glossy(&bsdf) && scattered < self.max_glossy && bounce < last;
+            if bsdf.has_non_delta() && room(bounce) >= 1 {
                 l[usize::from(scattered > 0)] += next_event(
                     scene,
                     &si,
@@ -173,7 +199,9 @@ impl DeptView<'_> {
                 break;
             };
             if !bs.is_delta && !glossy {
-                if sky {
+                // The BSDF-sampled emission is one more segment, the elements' paths at
+                // least two.
+                if sky && room(bounce) >= 1 {
                     // The other half of MIS: the BSDF-sampled ray's emission (sky or
                     // emitter), weighted against the light sample above.
                     stats.rays += 1;
@@ -210,11 +238,13 @@ impl DeptView<'_> {
                         }
                     }
                 }
-                let loc = self.mesh.locate(hit.tri, hit.b1, hit.b2);
-                let front = wo.dot(si.ng) >= 0.0;
-                let e =
-                    self.indirect.irradiance(&loc, front) + self.caustic.irradiance(&loc, front);
-                l[indirect] += beta * bs.weight * e * FRAC_1_PI;
+                if room(bounce) >= 2 {
+                    let loc = self.mesh.locate(hit.tri, hit.b1, hit.b2);
+                    let front = wo.dot(si.ng) >= 0.0;
+                    let e = self.indirect.irradiance(&loc, front)
+                        + self.caustic.irradiance(&loc, front);
+                    l[indirect] += beta * bs.weight * e * FRAC_1_PI;
+                }
                 break;
             }
             beta *= bs.weight;

@@ -65,6 +65,7 @@ use crate::dept::budget::luminances;
 use crate::dept::budget::{AutoPhotons, PhotonCount, next_total};
 use crate::dept::element_map::{
     ElementAccumulators, ElementMesh, FrameElements, FramePhotons, deposit_more_photons,
+    max_photon_bounces,
 };
 use crate::dept::reconstruct::{
     ADAPTIVE_LIST_RADIUS, ElementSolution, NeighbourCache, Neighbours, adaptive_sigma2,
@@ -148,6 +149,10 @@ pub struct SpacetimeSettings {
     pub kernel_photons: f32,
     /// Range kernel width in noise standard deviations. Default 2.
     pub kappa: f32,
+    /// Longest path in segments from the camera (`--max-depth`, Mitsuba's `max_depth`),
+    /// as `dept`'s ([`crate::dept::DeptSettings::max_depth`]). `None` (default):
+    /// unlimited.
+    pub max_depth: Option<u32>,
     /// Below this many pooled photons the range kernel is dropped (plain Gaussian).
     /// Default 8.
     pub min_photons: u32,
@@ -174,6 +179,7 @@ impl Default for SpacetimeSettings {
             radius: 2.5,
             kernel_photons: 0.0,
             kappa: 2.0,
+            max_depth: None,
             min_photons: 8,
             seed: 0,
         }
@@ -620,7 +626,14 @@ impl SpacetimeDept {
             let fe = FrameElements::new(sc, &mesh);
             let mut t = Traced::new(g, &mesh, &fe);
             let (base, n) = self.first_photons(g);
-            deposit_more_photons(sc, &mesh, base..base + n, s.seed, &mut t.photons);
+            deposit_more_photons(
+                sc,
+                &mesh,
+                base..base + n,
+                s.seed,
+                max_photon_bounces(s.max_depth),
+                &mut t.photons,
+            );
             let (rc, rd) = Traced::radii(&mesh, s.change_radius);
             let nd = self.nb_direct.get(&fe, rd);
             // One list for both filters when their radii agree (the default).
@@ -731,6 +744,7 @@ impl SequenceRenderer for SpacetimeDept {
                         &mesh,
                         base + total..base + t,
                         s.seed,
+                        max_photon_bounces(s.max_depth),
                         &mut tr.photons,
                     );
                     let (rc, rd) = Traced::radii(&mesh, s.change_radius);
@@ -778,6 +792,7 @@ impl SequenceRenderer for SpacetimeDept {
             caustic: &caustic,
             max_specular_depth: s.max_specular_depth,
             max_glossy: s.max_glossy,
+            max_depth: s.max_depth,
         };
         let t_pool = t0.elapsed();
         let t0 = std::time::Instant::now();

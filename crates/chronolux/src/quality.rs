@@ -355,7 +355,16 @@ pub fn run(args: QualityArgs) -> Result<()> {
     methods.extend(args.baseline.clone());
     let sets_of = |k: usize| if k == 0 { &method_sets } else { &baseline_sets };
     for (k, m) in methods.iter().enumerate() {
-        config_for(m, 1, args.max_depth, args.seed, args.window, sets_of(k))?;
+        let (tech, _) = config_for(m, 1, args.max_depth, args.seed, args.window, sets_of(k))?;
+        // Said, not dropped silently: its error then includes the light of longer paths
+        // than a depth-limited reference has.
+        if let Some(d) = args.max_depth
+            && registry::find_key(&tech.defaults(), "max_depth").is_none()
+        {
+            log::warn!(
+                "--max-depth {d} does not apply to --method {m}, which renders paths of every depth: its error against a reference limited to depth {d} includes the longer paths' light"
+            );
+        }
     }
     let hdr = flip::HdrSettings::default();
 

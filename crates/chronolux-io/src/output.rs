@@ -295,9 +295,38 @@ pub struct FrameSink {
     manifest: String,
 }
 
+/// Name of a writability probe file, followed by the process id of its writer.
+pub const PROBE_PREFIX: &str = ".chronolux-probe-";
+
+/// Removes the probe files in `dir` whose writer is gone: a run killed (SIGKILL runs no
+/// clean-up) between writing and removing its probe leaves it. Where process ids cannot be
+/// checked (no `/proc`), nothing is removed; a live writer's probe is never touched.
+pub fn remove_stale_probes(dir: &Path) {
+    let proc_fs = Path::new("/proc");
+    if !proc_fs.join("self").exists() {
+        return;
+    }
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let pid = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(PROBE_PREFIX))
+            .and_then(|p| p.parse::<u32>().ok());
+        if let Some(pid) = pid
+            && !proc_fs.join(pid.to_string()).exists()
+        {
+            let _ = fs::remove_file(e.path());
+        }
+    }
+}
+
 impl FrameSink {
     /// Creates `dir` (and parents) if needed and checks it is writable by writing and removing
-    /// a probe file. The error names the folder and the OS error on one line.
+    /// a probe file. The error names the folder and the OS error on one line. Probe files
+    /// of runs killed before they removed theirs are removed ([`remove_stale_probes`]).
     pub fn create(dir: &Path) -> Result<Self, OutputError> {
         let unwritable = |source| OutputError::Unwritable {
             path: dir.to_owned(),
@@ -310,7 +339,8 @@ impl FrameSink {
                 "not a directory",
             )));
         }
-        let probe = dir.join(format!(".chronolux-probe-{}", std::process::id()));
+        remove_stale_probes(dir);
+        let probe = dir.join(format!("{PROBE_PREFIX}{}", std::process::id()));
         let written = File::create(&probe).and_then(|mut f| {
             f.write_all(b"probe")?;
             f.sync_all()

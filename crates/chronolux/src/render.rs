@@ -451,7 +451,10 @@ impl run::FrameSink for DiskSink<'_> {
         if !own {
             return self.warm_up_until.is_some_and(|u| frame < u);
         }
-        !(self.resume && self.sink.is_complete(frame))
+        // Complete files without a record in run.json were written by a run killed before
+        // it recorded them: rendered again (the same bits), so that run.json lists every
+        // frame, as `chronolux reference --resume` does.
+        !(self.resume && self.sink.is_complete(frame) && self.manifest.frame(frame).is_some())
     }
 
     fn frame(&mut self, f: &run::FinishedFrame) -> Result<(), run::SinkError> {

@@ -138,6 +138,30 @@ fn sigkill_at_random_moments_then_resume_equals_an_uninterrupted_render() {
                 .count(),
         );
     }
+    // Every child may have finished before its moment (the machine ran faster than during
+    // the measured render, or the resumed runs had little left): then again from an empty
+    // folder with ever earlier moments, so that the test always proves a kill.
+    let mut again = 0;
+    while killed == 0 && again < 10 {
+        again += 1;
+        std::fs::remove_dir_all(&cut).unwrap();
+        let delay = full.mul_f64(uniform() / f64::from(1u32 << again));
+        let mut child = Command::new(env!("CARGO_BIN_EXE_chronolux"))
+            .args(args(&cut))
+            .env_remove("RUST_LOG")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("start chronolux");
+        std::thread::sleep(delay);
+        if child.try_wait().unwrap().is_none() {
+            child.kill().unwrap();
+            killed += 1;
+        }
+        child.wait().unwrap();
+        check_consistent(&cut, &format!("seed {seed}, again {again}"));
+    }
     // The last resume runs to the end.
     ok(&run(args(&cut)));
     check_consistent(&cut, &format!("seed {seed}, final"));
@@ -174,4 +198,51 @@ fn sigkill_at_random_moments_then_resume_equals_an_uninterrupted_render() {
     sa["threads"] = serde_json::Value::Null;
     sb["threads"] = serde_json::Value::Null;
     assert_eq!(sa, sb, "seed {seed}");
+}
+
+/// A kill between a frame's files and its record in run.json (the files are written
+/// first) leaves complete files without a record: `--resume` renders that frame again,
+/// so that run.json lists every frame (found by the test above under load: run.json
+/// lacked frame 6). Simulated here by deleting a record.
+#[test]
+fn resume_renders_a_frame_again_whose_record_is_missing() {
+    let dir = temp_dir("kill-record");
+    ok(&run(args(&dir)));
+    let path = dir.join("run.json");
+    let mut m: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    m["frames"]
+        .as_array_mut()
+        .unwrap()
+        .retain(|r| r["frame"] != 3);
+    std::fs::write(&path, serde_json::to_vec_pretty(&m).unwrap()).unwrap();
+    let before = contents(&dir);
+    let out = ok(&run(args(&dir)));
+    // Frame 3 rendered again, the others skipped.
+    assert!(!out.contains("frame 3 [4/8]: already complete"), "{out}");
+    assert!(out.contains("frame 2 [3/8]: already complete"), "{out}");
+    let frames: Vec<u64> = manifest(&dir)["frames"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["frame"].as_u64().unwrap())
+        .collect();
+    assert_eq!(frames, (0..8).collect::<Vec<_>>());
+    assert!(contents(&dir) == before, "the same bits again");
+}
+
+/// A probe file (the output folder's writability check) left by a run killed before it
+/// removed it is removed by the next run when its writer is gone, never when it is alive
+/// (this test process stands for a live writer).
+#[test]
+fn a_dead_runs_probe_file_is_removed_and_a_live_ones_kept() {
+    let dir = temp_dir("kill-probe");
+    std::fs::create_dir_all(&dir).unwrap();
+    // Above Linux's largest process id (2^22): no such process.
+    let dead = dir.join(".chronolux-probe-4294967294");
+    let live = dir.join(format!(".chronolux-probe-{}", std::process::id()));
+    std::fs::write(&dead, b"probe").unwrap();
+    std::fs::write(&live, b"probe").unwrap();
+    ok(&run(args(&dir)));
+    assert!(!dead.exists(), "a dead run's probe is left");
+    assert!(live.exists(), "a live run's probe was removed");
 }

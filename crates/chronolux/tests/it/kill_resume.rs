@@ -31,6 +31,27 @@ fn args(dir: &Path) -> Vec<String> {
     .to_vec()
 }
 
+/// Starts a render into `dir`, waits `delay` and kills it if it is still running; true
+/// when it was killed. `Child::kill` is SIGKILL on Unix: no destructor, no temporary-file
+/// clean-up runs.
+fn kill_after(dir: &Path, delay: std::time::Duration) -> bool {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_chronolux"))
+        .args(args(dir))
+        .env_remove("RUST_LOG")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("start chronolux");
+    std::thread::sleep(delay);
+    let running = child.try_wait().unwrap().is_none();
+    if running {
+        child.kill().unwrap();
+    }
+    child.wait().unwrap();
+    running
+}
+
 /// Every file of `dir` (name → bytes), except `run.json`, whose timings differ.
 fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     std::fs::read_dir(dir)
@@ -110,22 +131,7 @@ fn sigkill_at_random_moments_then_resume_equals_an_uninterrupted_render() {
     let mut progress = Vec::new();
     for attempt in 0..6 {
         let delay = full.mul_f64(uniform());
-        let mut child = Command::new(env!("CARGO_BIN_EXE_chronolux"))
-            .args(args(&cut))
-            .env_remove("RUST_LOG")
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start chronolux");
-        std::thread::sleep(delay);
-        // Child::kill is SIGKILL on Unix: no destructor, no temporary-file clean-up runs.
-        let finished = child.try_wait().unwrap().is_some();
-        if !finished {
-            child.kill().unwrap();
-            killed += 1;
-        }
-        child.wait().unwrap();
+        killed += u32::from(kill_after(&cut, delay));
         let why = format!(
             "seed {seed}, attempt {attempt}, killed after {:.3} s of {:.3} s",
             delay.as_secs_f64(),
@@ -146,20 +152,7 @@ fn sigkill_at_random_moments_then_resume_equals_an_uninterrupted_render() {
         again += 1;
         std::fs::remove_dir_all(&cut).unwrap();
         let delay = full.mul_f64(uniform() / f64::from(1u32 << again));
-        let mut child = Command::new(env!("CARGO_BIN_EXE_chronolux"))
-            .args(args(&cut))
-            .env_remove("RUST_LOG")
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("start chronolux");
-        std::thread::sleep(delay);
-        if child.try_wait().unwrap().is_none() {
-            child.kill().unwrap();
-            killed += 1;
-        }
-        child.wait().unwrap();
+        killed += u32::from(kill_after(&cut, delay));
         check_consistent(&cut, &format!("seed {seed}, again {again}"));
     }
     // The last resume runs to the end.

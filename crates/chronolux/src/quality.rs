@@ -236,7 +236,8 @@ pub struct QualityResult {
 
 /// The settings of `method` at `effort` (the unit its registry entry gives: samples per
 /// pixel, or thousands of photons per frame). `max_depth`, `seed` and `window` apply to
-/// the methods that have such a setting (they are given for the pair of methods).
+/// the methods that have such a setting (they are given for the pair of methods); the
+/// flags given that did not apply are returned last.
 pub fn config_for(
     method: &str,
     effort: u32,
@@ -244,7 +245,7 @@ pub fn config_for(
     seed: u64,
     window: Option<u32>,
     sets: &[(String, serde_json::Value)],
-) -> Result<(&'static dyn Technique, serde_json::Value)> {
+) -> Result<(&'static dyn Technique, serde_json::Value, Vec<&'static str>)> {
     let tech = registry::find(method).map_err(anyhow::Error::msg)?;
     let e = tech.capabilities().effort;
     let amount = u64::from(effort) * e.per_unit;
@@ -269,15 +270,17 @@ pub fn config_for(
         ("--seed", "seed", Some(seed.into())),
         ("--window", "window", window.map(serde_json::Value::from)),
     ];
+    let mut ignored = Vec::new();
     for (flag, key, value) in optional {
-        if let Some(value) = value
-            && registry::find_key(&defaults, key).is_some()
-        {
+        let Some(value) = value else { continue };
+        if registry::find_key(&defaults, key).is_some() {
             flags.push(FlagSetting { flag, key, value });
+        } else {
+            ignored.push(flag);
         }
     }
     let s = technique_settings(tech, None, &flags, photons.as_deref(), sets)?;
-    Ok((tech, s))
+    Ok((tech, s, ignored))
 }
 
 /// Parses `--measure`: comma-separated `A..B`, `A..=B` or `N`.
@@ -355,11 +358,11 @@ pub fn run(args: QualityArgs) -> Result<()> {
     methods.extend(args.baseline.clone());
     let sets_of = |k: usize| if k == 0 { &method_sets } else { &baseline_sets };
     for (k, m) in methods.iter().enumerate() {
-        let (tech, _) = config_for(m, 1, args.max_depth, args.seed, args.window, sets_of(k))?;
+        let (_, _, ignored) = config_for(m, 1, args.max_depth, args.seed, args.window, sets_of(k))?;
         // Said, not dropped silently: its error then includes the light of longer paths
         // than a depth-limited reference has.
         if let Some(d) = args.max_depth
-            && registry::find_key(&tech.defaults(), "max_depth").is_none()
+            && ignored.contains(&"--max-depth")
         {
             log::warn!(
                 "--max-depth {d} does not apply to --method {m}, which renders paths of every depth: its error against a reference limited to depth {d} includes the longer paths' light"
@@ -374,7 +377,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
         let mut reached: Vec<Option<Level>> = vec![None; targets.len()];
         let mut effort = args.start_effort;
         loop {
-            let (tech, settings) = config_for(
+            let (tech, settings, _) = config_for(
                 m,
                 effort,
                 args.max_depth,

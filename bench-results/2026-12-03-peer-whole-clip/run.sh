@@ -27,6 +27,8 @@ ours() {
   q ours-$1-st --method spacetime-dept --set spp=4 --start-effort 128 --max-effort 512
   echo "== ours $1 end $(date -u) $(uptime)" >> $OUT/log.txt
 }
+# OURS=FILE: a file that redefines ours() (a later run's configurations, same protocol).
+if [ -n "${OURS:-}" ]; then . "$OURS"; fi
 echo "== start $(date -u) $(uptime)" >> $OUT/log.txt
 ours a
 (cd $H && DRJIT_LIBLLVM_PATH=/usr/lib/x86_64-linux-gnu/libLLVM-19.so /work/.venv-peers/bin/python mitsuba_time_to_flip.py --frame-list $FL --levels 32,64,128 --targets 0.10,0.08 --threads 2 > $OUT/mitsuba.json 2> $OUT/mitsuba.err)

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Summary of run.sh: CPU s per 12 frames (the scored frames) at HDR-FLIP 0.08, and flicker there.
 Ours: CPU of the run x 12 / frames rendered (48 for a temporal method, 12 for a frame-by-frame
-one); peers: CPU of their 12 frames. Interpolated log-log between the levels straddling 0.08."""
+one); peers: CPU of their 12 frames. Interpolated log-log between the levels straddling 0.08.
+Usage: summarize.py [FOLDER [CFG,CFG,...]]"""
 import json, math, os, sys
 D = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.abspath(__file__))
 T = 0.08
@@ -27,7 +28,9 @@ rows = []
 for peer in ["mitsuba", "cycles"]:
     lv = json.loads(open(os.path.join(D, peer + ".json")).read().strip().splitlines()[-1])["levels"]
     rows.append((peer, lv))
-for cfg in ["path", "il2-k8", "il8-k8", "il16-k8", "st"]:
+# Our configurations (the name after ours-a-/ours-b-), comma-separated: argv[2].
+CFGS = sys.argv[2].split(",") if len(sys.argv) > 2 else ["path", "il2-k8", "il8-k8", "il16-k8", "st"]
+for cfg in CFGS:
     for r in "ab":
         lv = ours(f"ours-{r}-{cfg}")
         if lv:

@@ -240,6 +240,16 @@ impl Validity {
         }
     }
 
+    /// Whether any pixel at all may pool the past frame's light (false for
+    /// [`Validity::None`], and for [`Validity::Clear`] under a light at infinity).
+    pub fn may_allow(&self) -> bool {
+        match self {
+            Validity::All => true,
+            Validity::None => false,
+            Validity::Clear { lights, .. } => lights.is_some(),
+        }
+    }
+
     /// Pixel with `reach` may pool the past frame's light.
     pub fn allows(&self, reach: &Reach) -> bool {
         match self {

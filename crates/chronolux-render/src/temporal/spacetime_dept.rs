@@ -59,6 +59,22 @@
 //! A static scene keeps whole windows (2K + 1 frames, fewer at the ends of the render
 //! list); a change cuts the window of the elements it visibly changes at the change, on
 //! each side, so an abrupt change is not smeared into the frames before or after it.
+//!
+//! ## When it renders as `path`
+//! A frame gains over path tracing at the same camera samples only by its pooled
+//! per-pixel light and by the elements' indirect light. When no frame within
+//! `light_history` on either side can pool light with it (decided from the animation:
+//! [`Validity::may_allow`], false under a sky while anything moves and under a moving
+//! camera) and the **path probe** of its block of `window` frames
+//! ([`crate::temporal::probe`]: the path tracer's relative variance with and without its
+//! indirect part, on every 8th row of the block's first frame) finds that indirect light
+//! adds at most 10 % to path tracing's noise, the frame is rendered by the path tracer at
+//! `spp` samples, bit for bit `path`'s frame with the same seed, and its `path_probe`
+//! report says so (`rendered_as`, the variance ratio and the frame probed; frames rendered
+//! as `spacetime-dept` after a probe carry it too). Sky-lit glTF models whose every part
+//! moves are the case measured (BENCHMARKS.md, "Sky-lit models at 256²"); a lamp-lit
+//! room, the demo, its dolly and cornell-moving stay `spacetime-dept` (ratios 2–14).
+//! `path_probe = false` turns the probe off.
 
 use crate::dept::assess_frame;
 use crate::dept::budget::luminances;
@@ -73,8 +89,9 @@ use crate::dept::reconstruct::{
 };
 use crate::dept::reuse::{EyeRecord, Validity, combine, eye_pass};
 use crate::dept::view::DeptView;
-use crate::integrator::{LightSplit, RenderedFrame};
+use crate::integrator::{LightSplit, RenderedFrame, render_camera_rays};
 use crate::sequence::SequenceRenderer;
+use crate::temporal::probe::{Probe, path_tracer, probe, probe_frame};
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::parallel;
 use chronolux_core::scene::frame::FrameScene;
@@ -156,6 +173,11 @@ pub struct SpacetimeSettings {
     /// Below this many pooled photons the range kernel is dropped (plain Gaussian).
     /// Default 8.
     pub min_photons: u32,
+    /// Renders a frame as `path` at `spp` samples where the path probe shows that this
+    /// technique cannot gain there (module documentation, "When it renders as `path`";
+    /// [`crate::temporal::probe`]), and says so in the frame's `path_probe` report.
+    /// Default true.
+    pub path_probe: bool,
     /// Seed of the photon and camera streams. Default 0.
     pub seed: u64,
 }
@@ -181,6 +203,7 @@ impl Default for SpacetimeSettings {
             kappa: 2.0,
             max_depth: None,
             min_photons: 8,
+            path_probe: true,
             seed: 0,
         }
     }
@@ -447,6 +470,8 @@ pub struct SpacetimeDept {
     nb_change: NeighbourCache,
     nb_direct: NeighbourCache,
     nb_output: NeighbourCache,
+    /// The last path probe ([`crate::temporal::probe`]).
+    probe: Option<Probe>,
 }
 
 impl SpacetimeDept {
@@ -462,6 +487,7 @@ impl SpacetimeDept {
             nb_change: NeighbourCache::default(),
             nb_direct: NeighbourCache::default(),
             nb_output: NeighbourCache::default(),
+            probe: None,
         }
     }
 
@@ -601,6 +627,76 @@ impl SpacetimeDept {
         }
     }
 
+    /// `frame` rendered as `path` at `spp` when no per-pixel light can be reused for it
+    /// and the path probe of its block says path tracing suffices (module documentation,
+    /// "When it renders as `path`"). Otherwise `Err` with the probe's report when one was
+    /// consulted.
+    fn as_path(
+        &mut self,
+        source: &mut FrameSource,
+        frame: u32,
+        scene: &Arc<FrameScene>,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<RenderedFrame, Option<serde_json::Value>> {
+        let s = self.settings.clone();
+        if !s.path_probe {
+            return Err(None);
+        }
+        // From the animation: could any past frame's per-pixel light pool here, or this
+        // frame's in a later one? (The past and future frames within `light_history`
+        // stay cached: the look-ahead builds the future ones anyway.)
+        let history = s.light_history.min(s.window);
+        source.reserve(2 * history as usize + 2);
+        for g in source.window(frame, history, history) {
+            if g == frame {
+                continue;
+            }
+            let sg = match self.history.iter().find(|(h, _, _)| *h == g) {
+                Some((_, sc, _)) => sc.clone(),
+                None => source.frame(g),
+            };
+            let v = if g < frame {
+                Validity::between(&sg, scene)
+            } else {
+                Validity::between(scene, &sg)
+            };
+            if v.may_allow() {
+                return Err(None);
+            }
+        }
+        let p = probe_frame(source, frame, s.window);
+        let pr = match self.probe {
+            Some(pr) if pr.frame == p => pr,
+            _ => {
+                let sp = if p == frame {
+                    scene.clone()
+                } else {
+                    source.frame(p)
+                };
+                let pt = path_tracer(s.spp, s.max_depth, s.seed);
+                let pr = probe(&sp, p, &pt, s.spp, s.seed);
+                log::debug!(
+                    "spacetime-dept frame {frame}: no per-pixel light reuse possible; path probe of frame {p}: variance ratio {:.3} over {} pixels",
+                    pr.variance_ratio,
+                    pr.pixels
+                );
+                self.probe = Some(pr);
+                pr
+            }
+        };
+        let path = pr.path_suffices();
+        let mut report = serde_json::to_value(pr).expect("serialisable");
+        report["rendered_as"] = if path { "path" } else { "spacetime-dept" }.into();
+        if !path {
+            return Err(Some(report));
+        }
+        let pt = path_tracer(s.spp, s.max_depth, s.seed);
+        let mut img = render_camera_rays(&pt, scene, frame, s.spp, s.seed, progress);
+        img.report.insert("path_probe".into(), report);
+        img.report.insert("light_spp".into(), s.spp.into());
+        Ok(img)
+    }
+
     /// Traces the frames of `frame`'s window that are not traced yet, and forgets the
     /// frames that left it.
     fn trace_window(&mut self, source: &mut FrameSource, frame: u32, scene: &Arc<FrameScene>) {
@@ -702,6 +798,10 @@ impl SequenceRenderer for SpacetimeDept {
             self.history.clear();
         }
         self.last_output = Some(frame);
+        let probed = match self.as_path(source, frame, &scene_arc, progress) {
+            Ok(img) => return img,
+            Err(probed) => probed,
+        };
         // Wall-clock phases for `RUST_LOG=chronolux_render=debug` (a profile, not a
         // benchmark: see BENCHMARKS.md for CPU seconds).
         let t0 = std::time::Instant::now();
@@ -813,7 +913,9 @@ impl SequenceRenderer for SpacetimeDept {
                     continue;
                 }
                 let sg = source.frame(g);
-                if !mesh.matches(&sg) {
+                // A record whose every pixel is refused adds nothing (after frames
+                // rendered as `path`, most are).
+                if !mesh.matches(&sg) || !Validity::between(&sg, scene).may_allow() {
                     continue;
                 }
                 let e = eye_pass(&view, &sg, g, s.spp, s.seed, &|_| {});
@@ -854,6 +956,9 @@ impl SequenceRenderer for SpacetimeDept {
         let mean_pooled =
             pooled.iter().map(|&m| m as f64).sum::<f64>() / pooled.len().max(1) as f64;
         img.report.insert("light_spp".into(), mean_pooled.into());
+        if let Some(p) = probed {
+            img.report.insert("path_probe".into(), p);
+        }
         img.report.insert(
             "elements_per_diagonal".into(),
             s.elements_per_diagonal().into(),

@@ -1358,3 +1358,91 @@ fn dept_direct_light_under_a_sky_agrees_with_path_tracing() {
         );
     }
 }
+
+/// `spacetime-dept` renders a frame as `path` only where it cannot gain (module doc,
+/// "When it renders as `path`"), decided from the animation and the path probe alone:
+/// - the demo's sliding block alone under a uniform sky (the room, lamp and spheres
+///   removed): no per-pixel light can be pooled while the block moves under a light at
+///   infinity, and a convex object under a sky has no indirect light at all (every ray
+///   leaving it reaches the sky, which counts as direct), so the probe's variance ratio
+///   is exactly 1 and every frame is `path`'s frame bit for bit, with `rendered_as`
+///   "path" in its report;
+/// - the demo itself (lamp-lit, static camera): every frame can pool light with its
+///   neighbours, so none is probed; its frame 0 rendered alone has no frame to pool
+///   with, is probed and stays `spacetime-dept` (the room's interreflection and the
+///   glass sphere's caustic make path tracing's noise several times its direct light's:
+///   3.5 measured at 96², the limit is 1.1).
+#[test]
+fn spacetime_dept_renders_as_path_only_where_the_probe_finds_nothing_to_gain() {
+    use chronolux_core::light::Environment;
+    use chronolux_core::scene::stage::demo;
+    use chronolux_render::sequence::SequenceRenderer;
+    use chronolux_render::temporal::probe::MAX_PATH_RATIO;
+    use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
+    let (w, spp, seed) = (24u32, 4u32, 7u64);
+    let settings = SpacetimeSettings {
+        spp,
+        photons: 2_000,
+        elements: 20.0,
+        seed,
+        ..Default::default()
+    };
+    let mut sky = demo();
+    for n in &mut sky.nodes {
+        if n.name != "sliding_cube" {
+            n.mesh = None;
+        }
+        n.light = None;
+    }
+    sky.lights.clear();
+    sky.environment = Some(Environment::uniform(Rgb::new(0.8, 0.9, 1.0)));
+    let frames: Vec<u32> = (0..4).collect();
+    let mut src = crate::source(sky, w, w, 24.0, frames.clone());
+    let mut st = SpacetimeDept::new(settings.clone());
+    let pt = PathTracer::new(PathSettings {
+        spp,
+        seed,
+        ..Default::default()
+    });
+    let mut lit = 0usize;
+    for &f in &frames {
+        let img = st.render_frame(&mut src, f, &|_| {});
+        let p = &img.report["path_probe"];
+        assert_eq!(p["rendered_as"], "path", "frame {f}: {p}");
+        let ratio = p["variance_ratio"].as_f64().unwrap();
+        assert!((ratio - 1.0).abs() < 1e-9, "frame {f}: ratio {ratio}");
+        let reference = pt.render(&src.frame(f), f, &|_| {});
+        assert_eq!(
+            crate::bits(&img.pixels),
+            crate::bits(&reference.pixels),
+            "frame {f}"
+        );
+        lit += img.pixels.iter().filter(|p| p.x > 0.0).count();
+    }
+    assert!(lit > 0, "the block is in view");
+
+    // The demo: every frame can pool light with its neighbours, so none is probed.
+    let mut src = crate::source(demo(), w, w, 24.0, frames.clone());
+    let mut st = SpacetimeDept::new(settings.clone());
+    for &f in &frames[..3] {
+        let img = st.render_frame(&mut src, f, &|_| {});
+        assert!(
+            !img.report.contains_key("path_probe"),
+            "frame {f} can pool light but was probed"
+        );
+        assert!(
+            img.report.contains_key("photons"),
+            "frame {f} traced no photons"
+        );
+    }
+    // Its frame 0 alone: nothing to pool with, so it is probed, and stays.
+    let mut src = crate::source(demo(), w, w, 24.0, vec![0]);
+    let img = SpacetimeDept::new(settings).render_frame(&mut src, 0, &|_| {});
+    let p = &img.report["path_probe"];
+    assert_eq!(p["rendered_as"], "spacetime-dept", "{p}");
+    assert!(
+        p["variance_ratio"].as_f64().unwrap() > MAX_PATH_RATIO,
+        "{p}"
+    );
+    assert!(img.report.contains_key("photons"));
+}

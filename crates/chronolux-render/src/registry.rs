@@ -218,9 +218,10 @@ pub static TECHNIQUES: &[&dyn Technique] = &[
 /// It is biased (element size, temporal pooling): its error flattens where `stbpt`'s keeps
 /// falling (`--method stbpt` for an unbiased render that converges to `bdpt`). On models
 /// lit only by the sky it is 2.4× faster than `path` at equal FLIP where nothing moves
-/// (InterpolationTest's first frames), and where something moves it makes `path`'s image
-/// at 0.80–0.91× `path`'s speed at 256² (BoxAnimated, RiggedSimple, AnimatedMorphCube: no
-/// per-pixel light is reused under a sky while anything moves); the README says so.
+/// (InterpolationTest's first frames); where something moves under the sky and indirect
+/// light adds nothing to path tracing's noise, its path probe renders the frames as `path`
+/// and says so in `run.json` (0.96–1.00× `path`'s CPU at 256² on BoxAnimated,
+/// RiggedSimple, AnimatedMorphCube, 0.80–0.91× before: [`crate::temporal::probe`]).
 /// One default rather than a per-scene rule: what a scene needs (reuse or not) is decided
 /// by the technique from the animation while it renders (its change test cuts the
 /// temporal window), not guessed by the driver before the scene is seen.

@@ -7,12 +7,18 @@
 //! it **reuses per-pixel light** over frames where the animation leaves a pixel's paths
 //! unchanged ([`crate::dept::reuse`]), and it reads **indirect light** from smooth element
 //! estimates where path tracing samples it. Where the first is impossible (decided from
-//! the animation: [`crate::dept::reuse::Validity`] refuses every pixel against every past
-//! frame, as under a sky while anything moves, or under a moving camera), what is left is
+//! the animation: [`crate::dept::reuse::Validity`] refuses every pixel against every other
+//! frame within the light history, as under a sky while anything moves, or under a moving camera), what is left is
 //! the second, and its worth is what the indirect light adds to path tracing's noise.
-//! [`probe`] measures that on every [`PROBE_ROW_STEP`]-th row of the frame: the path
-//! tracer's per-pixel relative variance of the whole sample against that of its direct
-//! part alone (the same samples, [`crate::integrator::LightSplit`]'s convention). Their
+//! [`probe`] measures that on every [`PROBE_ROW_STEP`]-th row of the frame, at
+//! [`PROBE_SPP`] samples per pixel: the path
+//! tracer's per-pixel variance of the whole sample against that of its direct part alone
+//! (the same samples, [`crate::integrator::LightSplit`]'s convention), each relative to
+//! the pixel's direct light (mean² + 0.01, as relMSE's), summed over the pixels. The
+//! direct part, not the whole sample, sets a pixel's weight because it is the less noisy
+//! one: with the whole sample's mean, a firefly lowered its own pixel's weight, which at
+//! 4 samples per pixel under-counted noisy indirect light (`LightsPunctualLamp` of
+//! `../shared/scenes`, 96²: 1.09 at 4 samples, 1.18 at 16; with the direct mean 1.42). Their
 //! ratio `R` bounds what the elements can gain at equal camera samples: with noise-free
 //! elements and no light reuse, the technique's variance is at best the direct part's,
 //! i.e. `1 / R` of path tracing's. It costs its photons, its reconstruction and its eye
@@ -36,17 +42,21 @@ use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
 use chronolux_core::stats::Stats;
 
-/// The probe traces every `PROBE_ROW_STEP`-th row (1/8 of the pixels: at 256² that is
-/// 8k pixels, whose mean relative variance has a relative standard error of about 1 %).
+/// The probe traces every `PROBE_ROW_STEP`-th row (1/8 of the pixels: 8k at 256²).
 pub const PROBE_ROW_STEP: u32 = 8;
+
+/// Samples per pixel of the probe (at most; at least 2 for a variance). The ratio is one
+/// of per-sample variances, whatever the samples per pixel, so the probe takes no more
+/// than these: at 16 samples per pixel it costs 1/32 of a `path` frame per block.
+pub const PROBE_SPP: u32 = 4;
 
 /// Largest ratio `R` (see the module documentation) at which path tracing renders the
 /// frame: the photon technique's own cost over path's at equal samples, measured 1.10–1.21
 /// where nothing is reused.
 pub const MAX_PATH_RATIO: f64 = 1.1;
 
-/// Offset added to a pixel's squared mean in its relative variance (as relMSE's 0.01), so
-/// that black pixels do not dominate.
+/// Offset added to a pixel's squared direct mean in its relative variance (as relMSE's
+/// 0.01), so that black pixels do not dominate.
 const REL_EPS: f64 = 0.01;
 
 /// What the probe of one frame measured.
@@ -54,8 +64,8 @@ const REL_EPS: f64 = 0.01;
 pub struct Probe {
     /// The frame probed.
     pub frame: u32,
-    /// Σ over the probed pixels of var(whole sample) / (mean² + 0.01), over the same sum
-    /// for the direct part alone (luminance): `R` of the module documentation; infinite
+    /// Σ over the probed pixels of var(whole sample) / (direct mean² + 0.01), over the
+    /// same sum of var(direct part) (luminance): `R` of the module documentation; infinite
     /// when the direct part has no variance and the whole sample has.
     pub variance_ratio: f64,
     /// Pixels probed.
@@ -91,9 +101,11 @@ pub fn probe_frame(source: &FrameSource, frame: u32, period: u32) -> u32 {
         .unwrap_or(frame)
 }
 
-/// Probes `frame` of `scene` with `pt` at `spp` samples per pixel, from the streams of
-/// (`seed`, `frame`, pixel) as [`crate::integrator::render_camera_rays`] draws them.
+/// Probes `frame` of `scene` with `pt` at `spp` samples per pixel (clamped to
+/// 2..=[`PROBE_SPP`]), from the streams of (`seed`, `frame`, pixel) as
+/// [`crate::integrator::render_camera_rays`] draws them.
 pub fn probe(scene: &FrameScene, frame: u32, pt: &PathTracer, spp: u32, seed: u64) -> Probe {
+    let spp = spp.clamp(2, PROBE_SPP);
     let (w, h) = (scene.camera.width, scene.camera.height);
     let rows: Vec<u32> = if h < PROBE_ROW_STEP {
         vec![h / 2]
@@ -102,7 +114,7 @@ pub fn probe(scene: &FrameScene, frame: u32, pt: &PathTracer, spp: u32, seed: u6
             .step_by(PROBE_ROW_STEP as usize)
             .collect()
     };
-    let n = spp.max(2) as f64;
+    let n = spp as f64;
     let sums = parallel::map_chunks(rows.len(), 1, |range| {
         let mut stats = Stats::default();
         let (mut whole, mut direct, mut pixels) = (0.0f64, 0.0f64, 0u64);
@@ -111,7 +123,7 @@ pub fn probe(scene: &FrameScene, frame: u32, pt: &PathTracer, spp: u32, seed: u6
                 let mut sampler = PixelSampler::new(seed, frame, px, py);
                 // Σ, Σ² of the whole sample's and the direct part's luminance.
                 let mut m = [0.0f64; 4];
-                for s in 0..spp.max(2) {
+                for s in 0..spp {
                     sampler.start_sample(s);
                     let raster = Vec2::new(px as f32, py as f32) + sampler.next_2d();
                     let ray = scene.camera.generate_ray(raster);
@@ -125,7 +137,7 @@ pub fn probe(scene: &FrameScene, frame: u32, pt: &PathTracer, spp: u32, seed: u6
                     m[2] += d;
                     m[3] += d * d;
                 }
-                let mean = m[0] / n;
+                let mean = m[2] / n; // the direct part's: see the module documentation
                 let var = |s: f64, s2: f64| ((s2 - s * s / n) / (n - 1.0)).max(0.0);
                 let k = 1.0 / (mean * mean + REL_EPS);
                 whole += var(m[0], m[1]) * k;

@@ -71,9 +71,11 @@
 //! adds at most 10 % to path tracing's noise, the frame is rendered by the path tracer at
 //! `spp` samples, bit for bit `path`'s frame with the same seed, and its `path_probe`
 //! report says so (`rendered_as`, the variance ratio and the frame probed; frames rendered
-//! as `spacetime-dept` after a probe carry it too). Sky-lit glTF models whose every part
+//! as `spacetime-dept` after a probe carry it too; the probe takes at most 4 samples per
+//! pixel, so at 16 it costs 1/32 of a `path` frame per block). Sky-lit glTF models whose every part
 //! moves are the case measured (BENCHMARKS.md, "Sky-lit models at 256²"); a lamp-lit
-//! room, the demo, its dolly and cornell-moving stay `spacetime-dept` (ratios 2–14).
+//! room, the demo, its dolly and cornell-moving stay `spacetime-dept` (ratios 2.8–33 at
+//! 96²).
 //! `path_probe = false` turns the probe off.
 
 use crate::dept::assess_frame;

@@ -90,6 +90,8 @@ where
         // sets two keys) means "these two, the rest as default".
         let mut full = full_defaults(self);
         merge(&mut full, settings);
+        refuse_empty_renders(&full, "")
+            .map_err(|e| format!("settings of --method {}: {e}", self.name))?;
         serde_json::from_value(full).map_err(|e| {
             format!(
                 "settings of --method {}: {e} (valid keys: {})",
@@ -131,6 +133,37 @@ where
         crate::motion_blur::check_shutter(ctx.shutter)?;
         Ok((self.build)(self.parse(settings)?, ctx, self.name))
     }
+}
+
+/// Refuses the values that would render nothing at all, at any depth of a settings
+/// object (`--set` and `--config` reach them past the CLI's own range checks): camera
+/// samples `spp` = 0 (a black image) and `max_depth` = 0 (no path segment). `at`: the
+/// dotted path of `v`.
+fn refuse_empty_renders(v: &Value, at: &str) -> Result<(), String> {
+    let Value::Object(m) = v else {
+        return Ok(());
+    };
+    for (k, x) in m {
+        let key = if at.is_empty() {
+            k.clone()
+        } else {
+            format!("{at}.{k}")
+        };
+        match (k.as_str(), x.as_u64()) {
+            ("spp", Some(0)) => {
+                return Err(format!(
+                    "{key} = 0 renders a black image (at least 1 sample per pixel)"
+                ));
+            }
+            ("max_depth", Some(0)) => {
+                return Err(format!(
+                    "{key} = 0 renders nothing (1 shows emitters only, 2 adds direct lighting)"
+                ));
+            }
+            _ => refuse_empty_renders(x, &key)?,
+        }
+    }
+    Ok(())
 }
 
 fn full_defaults<S: Serialize>(p: &Preset<S>) -> Value {
@@ -428,6 +461,22 @@ mod tests {
                 t.name(),
                 e.key
             );
+        }
+    }
+
+    /// `--set spp=0` and `--set max_depth=0` rendered black images without a word; every
+    /// technique with such a key now refuses them, naming the key, and keeps 1.
+    #[test]
+    fn zero_samples_or_depth_are_refused_for_every_technique() {
+        for t in TECHNIQUES {
+            for key in ["spp", "max_depth"] {
+                if find_key(&t.defaults(), key).is_none() {
+                    continue;
+                }
+                let e = resolve(*t, None, &[(key.into(), Value::from(0))]).unwrap_err();
+                assert!(e.contains(&format!("{key} = 0")), "{}: {e}", t.name());
+                resolve(*t, None, &[(key.into(), Value::from(1))]).unwrap();
+            }
         }
     }
 

@@ -163,17 +163,14 @@ impl SegmentRun {
 
     /// For a stateful technique, the last frame that must be rendered (every frame before
     /// it is, in order, so that the history is whole): the last owned frame not yet
-    /// complete (with --resume), else the last owned frame. `None` for the others.
-    pub fn warm_up_until(&self, sink: &FrameSink, resume: bool) -> Option<u32> {
+    /// `done` (with --resume: complete and recorded, as the render's own test), else the
+    /// last owned frame. `None` for the others.
+    pub fn warm_up_until(&self, done: impl Fn(u32) -> bool, resume: bool) -> Option<u32> {
         if !self.render_before {
             return None;
         }
         let last = if resume {
-            self.owned
-                .iter()
-                .rev()
-                .find(|&&f| !sink.is_complete(f))
-                .copied()
+            self.owned.iter().rev().find(|&&f| !done(f)).copied()
         } else {
             self.owned.last().copied()
         };
@@ -602,6 +599,22 @@ pub fn assemble(a: AssembleArgs) -> Result<()> {
         records.extend(m.frames.into_iter().filter(|r| s.owned.contains(&r.frame)));
     }
     records.sort_by_key(|r| r.frame);
+    // Complete files without a record: a segment killed between writing a frame and
+    // recording it (its `--resume` renders such a frame again).
+    let unrecorded: Vec<u32> = c
+        .frames
+        .iter()
+        .copied()
+        .filter(|f| records.binary_search_by_key(f, |r| r.frame).is_err())
+        .collect();
+    if !unrecorded.is_empty() {
+        bail!(
+            "{}: {} frame(s) have their files but no record in their segment's run.segment-NNNN.json (the segment was stopped before recording them): {:?} (re-run their segments with --resume)",
+            a.dir.display(),
+            unrecorded.len(),
+            unrecorded
+        );
+    }
     let mut settings = serde_json::to_value(c)?;
     settings["farm"] = serde_json::json!({
         "segments": plan.segments,

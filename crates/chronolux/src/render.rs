@@ -369,6 +369,13 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         rayon::current_num_threads(),
         exec.output.display()
     ));
+    // A frame is done when complete and recorded (`DiskSink::needs`'s own test).
+    let warm_up_until = exec.segment.as_ref().and_then(|s| {
+        s.warm_up_until(
+            |f| sink.is_complete(f) && manifest.frame(f).is_some(),
+            exec.resume,
+        )
+    });
     let mut disk = DiskSink {
         sink: &sink,
         manifest,
@@ -378,10 +385,7 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         denoise: config.denoise.then_some(config.denoise_quality),
         keep_passes: asked,
         owned: exec.segment.as_ref().map(|s| s.owned.clone()),
-        warm_up_until: exec
-            .segment
-            .as_ref()
-            .and_then(|s| s.warm_up_until(&sink, exec.resume)),
+        warm_up_until,
     };
     let mut progress = progress;
     let result = chronolux_render::run::run_with(
@@ -447,9 +451,14 @@ pub struct DiskSink<'a> {
 
 impl run::FrameSink for DiskSink<'_> {
     fn needs(&self, frame: u32) -> bool {
-        let own = self.owned.as_ref().is_none_or(|o| o.contains(&frame));
-        if !own {
-            return self.warm_up_until.is_some_and(|u| frame < u);
+        // A stateful technique's segment renders every frame before the last one it must
+        // render, in order, its own complete frames included (written again, the same
+        // bits), so that the history is that of an uninterrupted run.
+        if self.warm_up_until.is_some_and(|u| frame < u) {
+            return true;
+        }
+        if self.owned.as_ref().is_some_and(|o| !o.contains(&frame)) {
+            return false;
         }
         // Complete files without a record in run.json were written by a run killed before
         // it recorded them: rendered again (the same bits), so that run.json lists every

@@ -155,3 +155,69 @@ fn a_plan_fixes_the_settings_and_assemble_finds_missing_frames() {
         &["missing", "[4, 5, 6, 7, 8, 9]"],
     );
 }
+
+/// A stateful technique's segment stopped between writing a frame and recording it:
+/// `assemble` names the frame instead of writing a run.json without it, and the
+/// segment's `--resume` renders it again from the same history (the frames before it,
+/// warm-up and its own complete ones, in order), so the frame comes out bit for bit as
+/// the uninterrupted segment made it.
+#[test]
+fn an_unrecorded_frame_of_a_stateful_segment_is_found_and_resumed_bit_for_bit() {
+    let farm = temp_dir("farm-unrecorded");
+    let plan = farm.join("plan.json");
+    // ic-selective: its cache ages frame by frame, so a frame rendered without the
+    // frames before it differs (measured: a resume that skipped frame 3 changed frame 4).
+    let out = run([
+        "plan",
+        "--method",
+        "ic-selective",
+        "--frames",
+        "0..6",
+        "--segments",
+        "2",
+        "--resolution",
+        "8x8",
+        "--set",
+        "photons=1000",
+        "--set",
+        "spp=1",
+        "--json",
+    ]);
+    ok(&out);
+    std::fs::write(&plan, stdout(&out)).unwrap();
+    let segment = |i: &str, resume: bool| {
+        let mut args = vec![
+            "render",
+            "--plan",
+            plan.to_str().unwrap(),
+            "--segment",
+            i,
+            "--output",
+            farm.to_str().unwrap(),
+        ];
+        if resume {
+            args.push("--resume");
+        }
+        ok(&run(args));
+    };
+    segment("0", false);
+    segment("1", false);
+    let before = exr(&farm, 4);
+    // Segment 1 owns 3..=5; frame 4's record is lost.
+    let m = farm.join("run.segment-0001.json");
+    let mut doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&m).unwrap()).unwrap();
+    doc["frames"]
+        .as_array_mut()
+        .unwrap()
+        .retain(|r| r["frame"] != 4);
+    std::fs::write(&m, doc.to_string()).unwrap();
+    fails(
+        &run(["assemble", farm.to_str().unwrap(), "--no-preview"]),
+        &["no record", "[4]", "--resume"],
+    );
+    segment("1", true);
+    assert!(exr(&farm, 4) == before, "frame 4 resumed differs");
+    ok(&run(["assemble", farm.to_str().unwrap(), "--no-preview"]));
+    assert_eq!(manifest(&farm)["frames"].as_array().unwrap().len(), 6);
+}

@@ -46,7 +46,7 @@
 //! photon flux sum (RGB), photon count, and sum of squared luminance flux (for the noise
 //! estimate of the reconstruction). Not hit points: memory is O(elements).
 
-use crate::kernels::photon::{PhotonHit, PhotonStats, trace_photons};
+use crate::kernels::photon::{MAX_BOUNCES, PhotonHit, PhotonStats, trace_photons_within};
 use chronolux_core::accel::TriRef;
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::geometry::Bounds3;
@@ -620,9 +620,9 @@ pub fn max_photon_bounces(max_depth: Option<u32>) -> Option<u32> {
 }
 
 /// Adds photons `indices` to `out` (the photon total grows by their number), in
-/// photon-index order: depositing `a..b` then `b..c` gives exactly `a..c`'s sums. Hits
-/// after more than `max_bounces` scattering events are left out
-/// ([`max_photon_bounces`]).
+/// photon-index order: depositing `a..b` then `b..c` gives exactly `a..c`'s sums. Paths
+/// end after `max_bounces` scattering events ([`max_photon_bounces`]): their later hits
+/// are neither traced nor deposited.
 pub fn deposit_more_photons(
     scene: &FrameScene,
     mesh: &ElementMesh,
@@ -638,12 +638,10 @@ pub fn deposit_more_photons(
     let mut lo = indices.start;
     while lo < indices.end {
         let hi = (lo + BATCH).min(indices.end);
-        let (hits, stats) = trace_photons(scene, lo..hi, seed, |h: &PhotonHit| {
-            // Photons past the depth limit carry light of longer paths: not deposited
-            // (they still count as emitted, so the estimate stays per emitted photon).
-            if max_bounces.is_some_and(|m| h.bounces > m) {
-                return None;
-            }
+        // Paths end at the depth limit: the hits past it carry light of longer paths
+        // (the photons still count as emitted, so the estimate stays per emitted photon).
+        let cap = max_bounces.unwrap_or(MAX_BOUNCES);
+        let (hits, stats) = trace_photons_within(scene, lo..hi, seed, cap, |h: &PhotonHit| {
             let e = mesh.locate(h.tri, h.b1, h.b2).element;
             let kind = if !h.is_indirect() {
                 0u8

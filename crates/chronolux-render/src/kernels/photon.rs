@@ -147,12 +147,28 @@ pub fn trace_photon(
     scene: &FrameScene,
     index: u64,
     seed: u64,
+    callback: impl FnMut(&PhotonHit),
+) -> PhotonStats {
+    trace_photon_within(scene, index, seed, MAX_BOUNCES, callback)
+}
+
+/// [`trace_photon`] ending the path after its hit with `max_bounces` scattering events
+/// (at most [`MAX_BOUNCES`]): the same hits as [`trace_photon`]'s with
+/// [`PhotonHit::bounces`] ≤ `max_bounces`, without tracing the rest of the path (a
+/// depth-limited render's photons, [`crate::dept::element_map::max_photon_bounces`]).
+pub fn trace_photon_within(
+    scene: &FrameScene,
+    index: u64,
+    seed: u64,
+    max_bounces: u32,
     mut callback: impl FnMut(&PhotonHit),
 ) -> PhotonStats {
-    trace_photon_path(
+    walk(
         scene,
         index,
         seed,
+        false,
+        max_bounces.min(MAX_BOUNCES),
         |_, _| {},
         |v| {
             if v.deposited {
@@ -176,7 +192,16 @@ pub fn trace_photon_path(
     on_vertex: impl FnMut(&PathVertex),
     on_escape: impl FnMut(&Ray),
 ) -> PhotonStats {
-    walk(scene, index, seed, false, on_light, on_vertex, on_escape)
+    walk(
+        scene,
+        index,
+        seed,
+        false,
+        MAX_BOUNCES,
+        on_light,
+        on_vertex,
+        on_escape,
+    )
 }
 
 /// [`trace_photon`] restricted to caustic photons: the same photon `index` (same numbers,
@@ -195,6 +220,7 @@ pub fn trace_caustic_photon(
         index,
         seed,
         true,
+        MAX_BOUNCES,
         |_, _| {},
         |v| {
             if v.deposited && v.hit.caustic {
@@ -206,12 +232,15 @@ pub fn trace_caustic_photon(
 }
 
 /// The photon walk of [`trace_photon_path`]; with `specular_only`, the walk ends at the
-/// first bounce that samples a non-delta lobe (everything before it is unchanged).
+/// first bounce that samples a non-delta lobe, and in any case after the vertex reached by
+/// `max_bounces` bounces (everything before either is unchanged).
+#[allow(clippy::too_many_arguments)]
 fn walk(
     scene: &FrameScene,
     index: u64,
     seed: u64,
     specular_only: bool,
+    max_bounces: u32,
     mut on_light: impl FnMut(usize, &Ray),
     mut on_vertex: impl FnMut(&PathVertex),
     mut on_escape: impl FnMut(&Ray),
@@ -276,7 +305,7 @@ fn walk(
             deposited,
             material: si.material,
         });
-        if bounces >= MAX_BOUNCES {
+        if bounces >= max_bounces {
             break;
         }
         let d = bounce_dim(bounces);
@@ -316,6 +345,18 @@ pub fn trace_photons<T: Send>(
     seed: u64,
     map: impl Fn(&PhotonHit) -> Option<T> + Sync,
 ) -> (Vec<T>, PhotonStats) {
+    trace_photons_within(scene, indices, seed, MAX_BOUNCES, map)
+}
+
+/// [`trace_photons`] with every path ended after `max_bounces` scattering events
+/// ([`trace_photon_within`]).
+pub fn trace_photons_within<T: Send>(
+    scene: &FrameScene,
+    indices: std::ops::Range<u64>,
+    seed: u64,
+    max_bounces: u32,
+    map: impl Fn(&PhotonHit) -> Option<T> + Sync,
+) -> (Vec<T>, PhotonStats) {
     let n = indices.end.saturating_sub(indices.start);
     let chunks = parallel::map_chunks(n.div_ceil(PHOTON_CHUNK) as usize, 1, |r| {
         let c = r.start as u64;
@@ -324,7 +365,7 @@ pub fn trace_photons<T: Send>(
         let mut out = Vec::new();
         let mut stats = PhotonStats::default();
         for i in lo..hi {
-            stats += trace_photon(scene, i, seed, |hit| {
+            stats += trace_photon_within(scene, i, seed, max_bounces, |hit| {
                 if let Some(t) = map(hit) {
                     out.push(t);
                 }

@@ -798,6 +798,8 @@ impl SequenceRenderer for SpacetimeDept {
         if self.last_output.is_some_and(|l| l >= frame) {
             self.frames.clear();
             self.history.clear();
+            // The scene may have been edited (the live view renders a frame again).
+            self.probe = None;
         }
         self.last_output = Some(frame);
         let probed = match self.as_path(source, frame, &scene_arc, progress) {

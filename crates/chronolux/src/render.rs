@@ -642,8 +642,18 @@ impl run::FrameSink for Progress {
         } else {
             format!("{:.2} M rays", rays as f64 / 1e6)
         };
+        // A frame the technique rendered as its baseline (its path probe found nothing
+        // to gain: `spacetime-dept`, module doc "When it renders as `path`").
+        let probe = &out.report.get("path_probe");
+        let as_path = match probe {
+            Some(p) if p["rendered_as"] == "path" => format!(
+                ", rendered as path: nothing to reuse (indirect light adds {:.0} % noise)",
+                100.0 * (p["variance_ratio"].as_f64().unwrap_or(1.0) - 1.0).max(0.0)
+            ),
+            _ => String::new(),
+        };
         self.say(format!(
-            "frame {} [{:>width$}/{}] t={:.3} s: {:.2} s, {work}{}",
+            "frame {} [{:>width$}/{}] t={:.3} s: {:.2} s, {work}{as_path}{}",
             f.frame,
             f.k + 1,
             f.n,

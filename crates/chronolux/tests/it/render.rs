@@ -490,3 +490,52 @@ fn unlit_white_model_stands_out_from_the_fallback_backdrop() {
         png.pixels[0]
     );
 }
+
+/// The default technique on a model lit only by the sky whose every part moves (a skinned
+/// one) cannot share light between frames, and its indirect light adds nothing to path
+/// tracing's noise: every frame is rendered as `path` (bit for bit `--method path` at the
+/// same samples), the progress line says so and each `run.json` record carries the
+/// probe's figures.
+#[test]
+fn a_sky_lit_skinned_model_renders_as_path_and_says_so() {
+    let Some(model) = scene("RiggedSimple.glb") else {
+        return;
+    };
+    let model = model.to_str().unwrap();
+    let common = ["--frames", "0..3", "--resolution", "24x24", "--no-preview"];
+    let ours = temp_dir("sky-default");
+    let mut args = vec![
+        "render",
+        model,
+        "--spp",
+        "4",
+        "--output",
+        ours.to_str().unwrap(),
+    ];
+    args.extend(common);
+    let out = ok(&run(&args));
+    assert_eq!(out.matches("rendered as path").count(), 3, "{out}");
+    for r in manifest(&ours)["frames"].as_array().unwrap() {
+        assert_eq!(r["stats"]["path_probe"]["rendered_as"], "path", "{r}");
+    }
+    let path = temp_dir("sky-path");
+    let mut args = vec![
+        "render",
+        model,
+        "--method",
+        "path",
+        "--spp",
+        "4",
+        "--output",
+        path.to_str().unwrap(),
+    ];
+    args.extend(common);
+    ok(&run(&args));
+    for f in 0..3 {
+        let name = format!("frame_{f:04}.exr");
+        assert!(
+            std::fs::read(ours.join(&name)).unwrap() == std::fs::read(path.join(&name)).unwrap(),
+            "frame {f} differs from path's"
+        );
+    }
+}

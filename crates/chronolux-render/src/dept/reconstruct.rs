@@ -112,9 +112,9 @@ impl Chunk {
                         Err(_) => grid.row(fe, e, r2, &mut c.items),
                     }
                     // Rows are deterministic without sorting: grid buckets are filled in
-                    // element order and visited in a fixed order. (Sorting them by
-                    // element id was 22 % of `spacetime-dept`'s CPU: BENCHMARKS.md,
-                    // issue 17.)
+                    // element order and visited in a fixed order. (They were sorted by
+                    // element id before, a large share of `spacetime-dept`'s CPU in a
+                    // profile of issue 17 whose figure BENCHMARKS.md does not keep.)
                     c.gauss
                         .extend(c.items[from..].iter().map(|&(_, d2)| (-d2 * inv2s2).exp()));
                 }

@@ -138,7 +138,7 @@ pub struct SpacetimeSettings {
     /// `exp(−(S_k − S_f)² / (2 κ_t² (σ_k² + σ_f²)))` (S: the change statistic, σ² its
     /// variance; f the output frame), so frames whose light differs from the output
     /// frame's by more than its noise count less ([`temporal_weight`]). 0: flat (only the
-    /// Gaussian and the cut). Default 0: with κ_t = 2 the FLIP error rose 1.5–2.5 % and
+    /// Gaussian and the cut). Default 0: with κ_t = 2 the FLIP error rose 1.5–2.7 % and
     /// the flicker 4–9 % on cornell-moving and the demo at 4k–16k photons per frame (κ_t =
     /// 4: no change), since the cut already stops the visible changes there and the range
     /// weights add noise (BENCHMARKS.md, issue 17).

@@ -783,7 +783,16 @@ impl SequenceRenderer for SpacetimeDept {
         let scene_arc = source.frame(frame);
         let scene = &*scene_arc;
         if !self.mesh.as_ref().is_some_and(|m| m.matches(scene)) {
-            let mesh = ElementMesh::build(scene, s.elements_per_diagonal());
+            // From frame 0's scene whatever frame the run starts at: the element size
+            // follows the scene's bounds, which the animation can change, so a farm
+            // segment building from its own first frame got other elements than the
+            // single run (InterpolationTest: every frame of the last segment differed).
+            // The output frame's own scene only if frame 0's topology differs.
+            let start = source.frame(0);
+            let mut mesh = ElementMesh::build(&start, s.elements_per_diagonal());
+            if !mesh.matches(scene) {
+                mesh = ElementMesh::build(scene, s.elements_per_diagonal());
+            }
             log::debug!(
                 "spacetime-dept: {} elements ({} clusters of small triangles) on {} triangles, element size {:.4}",
                 mesh.element_count(),

@@ -166,16 +166,30 @@ impl SegmentRun {
     /// `done` (with --resume: complete and recorded, as the render's own test), else the
     /// last owned frame. `None` for the others.
     pub fn warm_up_until(&self, done: impl Fn(u32) -> bool, resume: bool) -> Option<u32> {
-        if !self.render_before {
-            return None;
-        }
-        let last = if resume {
-            self.owned.iter().rev().find(|&&f| !done(f)).copied()
-        } else {
-            self.owned.last().copied()
-        };
-        Some(last.unwrap_or(0))
+        warm_up_until(&self.owned, self.render_before, done, resume)
     }
+}
+
+/// For a stateful technique (`render_before`) writing `owned` (ascending), the last frame
+/// that must be rendered, every frame before it rendered too, in order, so that the history
+/// is that of an uninterrupted run: the last owned frame not yet `done` (with --resume),
+/// else the last owned frame; 0 when every frame is done. `None` for the others. A whole
+/// `render --resume` is one segment owning every frame.
+pub fn warm_up_until(
+    owned: &[u32],
+    render_before: bool,
+    done: impl Fn(u32) -> bool,
+    resume: bool,
+) -> Option<u32> {
+    if !render_before {
+        return None;
+    }
+    let last = if resume {
+        owned.iter().rev().find(|&&f| !done(f)).copied()
+    } else {
+        owned.last().copied()
+    };
+    Some(last.unwrap_or(0))
 }
 
 /// Cuts `frames` into segments and adds each one's context.

@@ -369,13 +369,32 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         rayon::current_num_threads(),
         exec.output.display()
     ));
-    // A frame is done when complete and recorded (`DiskSink::needs`'s own test).
-    let warm_up_until = exec.segment.as_ref().and_then(|s| {
-        s.warm_up_until(
-            |f| sink.is_complete(f) && manifest.frame(f).is_some(),
+    // A frame is done when complete and recorded (`DiskSink::needs`'s own test). A
+    // stateful technique resumed renders its history again, as a farm segment does, so
+    // that a resumed render equals an uninterrupted one bit for bit.
+    let done = |f| sink.is_complete(f) && manifest.frame(f).is_some();
+    let warm_up_until = match &exec.segment {
+        Some(s) => s.warm_up_until(done, exec.resume),
+        None => crate::farm::warm_up_until(
+            &frames,
+            registry::frame_context(tech, &config.technique).render_before,
+            done,
             exec.resume,
-        )
-    });
+        ),
+    };
+    if exec.resume
+        && exec.segment.is_none()
+        && let Some(u) = warm_up_until
+    {
+        let again = frames.iter().filter(|&&f| f < u && done(f)).count();
+        if again > 0 {
+            progress.say(format!(
+                "resuming {}, which carries light from frame to frame: the {again} complete \
+                 frame(s) before frame {u} are rendered again (the same bits) to rebuild its history",
+                renderer.name()
+            ));
+        }
+    }
     let mut disk = DiskSink {
         sink: &sink,
         manifest,

@@ -223,6 +223,59 @@ fn resume_renders_a_frame_again_whose_record_is_missing() {
     assert!(contents(&dir) == before, "the same bits again");
 }
 
+/// A stateful technique without a window (`ic-selective`: its cache ages frame by frame)
+/// resumed after a stop at frame 3 renders frames 0–2 again for its history, so the
+/// resumed frames equal an uninterrupted render's bit for bit; before, it started frame 3
+/// from an empty history and wrote different bits without a word.
+#[test]
+fn a_resumed_stateful_render_rebuilds_its_history_and_equals_an_uninterrupted_one() {
+    let dir = temp_dir("resume-stateful");
+    let args = |dir: &Path| {
+        let mut a = args(dir);
+        a.extend(
+            [
+                "--method",
+                "ic-selective",
+                "--set",
+                "photons=1000",
+                "--set",
+                "spp=1",
+            ]
+            .map(String::from),
+        );
+        a
+    };
+    ok(&run(args(&dir)));
+    let whole = contents(&dir);
+    // A render stopped after frame 2: frames 3–7 have neither files nor records.
+    for f in 3..8 {
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with(&format!("frame_{f:04}"))
+            {
+                std::fs::remove_file(p).unwrap();
+            }
+        }
+    }
+    let path = dir.join("run.json");
+    let mut m: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    m["frames"]
+        .as_array_mut()
+        .unwrap()
+        .retain(|r| r["frame"].as_u64().unwrap() < 3);
+    std::fs::write(&path, serde_json::to_vec_pretty(&m).unwrap()).unwrap();
+    let out = ok(&run(args(&dir)));
+    assert!(out.contains("rendered again"), "{out}");
+    assert!(
+        contents(&dir) == whole,
+        "the resumed frames differ from an uninterrupted run's"
+    );
+    assert_eq!(manifest(&dir)["frames"].as_array().unwrap().len(), 8);
+}
+
 /// A probe file (the output folder's writability check) left by a run killed before it
 /// removed it is removed by the next run when its writer is gone, never when it is alive
 /// (this test process stands for a live writer).

@@ -40,7 +40,9 @@ pub struct QualityArgs {
     /// temporal technique's windows are whole where it is measured (not truncated by the
     /// ends of a short clip). Flicker is taken over consecutive measured frames. A
     /// frame-by-frame (stateless) method renders only the measured frames, since the
-    /// others cannot change its images.
+    /// others cannot change its images. Times are compared per measured frames: a run's
+    /// time × measured / rendered frames (what that many frames of a long animation cost),
+    /// so a temporal method that renders more frames than it scores is not charged for them.
     #[arg(long, value_name = "FRAMES")]
     pub measure: Option<String>,
     /// Folder of converged reference frames (frame_NNNN.exr), e.g. made by
@@ -133,13 +135,38 @@ impl FrameSink for ScoredSink {
 #[derive(Clone, Debug, Serialize)]
 pub struct Level {
     pub effort: u32,
+    /// Wall and process CPU seconds of the whole render (every frame rendered).
     pub wall_s: f64,
     pub cpu_s: f64,
+    /// Frames this level rendered and scored. A temporal method renders more than it scores
+    /// (`--measure`, whole windows), a frame-by-frame one only the scored frames; every
+    /// comparison (times to a target, speed-ups) takes [`Level::scored_wall_s`] and
+    /// [`Level::scored_cpu_s`], the time of as many frames of the run as were scored.
+    pub frames_rendered: usize,
+    pub frames_scored: usize,
     pub flip_mean: f64,
     pub flip_max: f64,
     pub relmse_mean: f64,
     /// Mean over pairs of measured frames consecutive in the render (None if no pair).
     pub flicker: Option<f64>,
+}
+
+impl Level {
+    fn scored_share(&self) -> f64 {
+        self.frames_scored as f64 / self.frames_rendered.max(1) as f64
+    }
+
+    /// Wall seconds of as many frames as were scored: the run's × scored / rendered, the
+    /// cost of that many frames of a long animation (every frame of a temporal method pays
+    /// for one frame's photons, samples and reconstruction, its window's or not).
+    pub fn scored_wall_s(&self) -> f64 {
+        self.wall_s * self.scored_share()
+    }
+
+    /// Process CPU seconds, scaled as [`Level::scored_wall_s`].
+    pub fn scored_cpu_s(&self) -> f64 {
+        self.cpu_s * self.scored_share()
+    }
 }
 
 /// A method's curve and its times to each target.
@@ -153,20 +180,22 @@ pub struct MethodResult {
     /// effort levels that bracket it (error falls as a power of effort, time rises
     /// linearly, so both are straight in log-log). The first-level rule above overstates a
     /// method's time by up to a whole doubling, depending only on where the grid falls;
-    /// this removes that. `None` when the target is not bracketed.
+    /// this removes that. `None` when the target is not bracketed. Per scored frames
+    /// ([`Level::scored_wall_s`]).
     pub interpolated_time_s: Vec<Option<f64>>,
     /// The same in process CPU seconds (the comparison to use on a shared, loaded machine).
     pub interpolated_cpu_s: Vec<Option<f64>>,
 }
 
-/// Wall time at which `levels` (in increasing effort) reach `target`, log-log interpolated.
+/// Wall time (per scored frames) at which `levels` (in increasing effort) reach `target`,
+/// log-log interpolated.
 pub fn interpolate_time(levels: &[Level], target: f64, criterion: &str) -> Option<f64> {
-    interpolate_by(levels, target, criterion, |l| l.wall_s)
+    interpolate_by(levels, target, criterion, Level::scored_wall_s)
 }
 
 /// CPU seconds at which `levels` reach `target`, interpolated as [`interpolate_time`].
 pub fn interpolate_cpu(levels: &[Level], target: f64, criterion: &str) -> Option<f64> {
-    interpolate_by(levels, target, criterion, |l| l.cpu_s)
+    interpolate_by(levels, target, criterion, Level::scored_cpu_s)
 }
 
 fn interpolate_by(
@@ -462,15 +491,20 @@ pub fn run(args: QualityArgs) -> Result<()> {
                 effort,
                 wall_s,
                 cpu_s,
+                frames_rendered: rendered.len(),
+                frames_scored: measured.len(),
                 flip_mean: flips.iter().sum::<f64>() / flips.len() as f64,
                 flip_max: flips.iter().copied().fold(0.0, f64::max),
                 relmse_mean: relmse.iter().sum::<f64>() / relmse.len() as f64,
                 flicker,
             };
             eprintln!(
-                "{m} effort {effort}: {:.2} s wall, {:.2} s CPU, FLIP mean {:.4} max {:.4}, flicker {}",
+                "{m} effort {effort}: {:.2} s wall, {:.2} s CPU ({:.2} s per {} measured of {} rendered frames), FLIP mean {:.4} max {:.4}, flicker {}",
                 level.wall_s,
                 level.cpu_s,
+                level.scored_cpu_s(),
+                level.frames_scored,
+                level.frames_rendered,
                 level.flip_mean,
                 level.flip_max,
                 level.flicker.map_or("-".into(), |f| format!("{f:.4}"))
@@ -506,7 +540,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
     // The flat fields speak of the first target as given on the command line.
     let first = args.target_flip[0];
     let k0 = targets.iter().position(|t| *t == first).unwrap();
-    let time = |r: &MethodResult, k: usize| r.reached[k].as_ref().map(|l| l.wall_s);
+    let time = |r: &MethodResult, k: usize| r.reached[k].as_ref().map(Level::scored_wall_s);
     let flick = |r: &MethodResult, k: usize| r.reached[k].as_ref().and_then(|l| l.flicker);
     let interp = |r: &MethodResult, k: usize| r.interpolated_time_s[k];
     let cpu = |r: &MethodResult, k: usize| r.interpolated_cpu_s[k];
@@ -570,7 +604,7 @@ fn opt(v: Option<f64>, digits: usize) -> String {
 pub fn markdown(r: &QualityResult) -> String {
     let mut s = String::new();
     s += &format!(
-        "# Equal-quality benchmark: {}{}{}\n\nFrames rendered {:?} (frame-by-frame methods: only the measured ones), measured {:?}, criterion: {} HDR-FLIP over frames.\n\n",
+        "# Equal-quality benchmark: {}{}{}\n\nFrames rendered {:?} (frame-by-frame methods: only the measured ones), measured {:?}, criterion: {} HDR-FLIP over frames. Times are per measured frames: a run's × measured / rendered frames.\n\n",
         r.method,
         r.baseline
             .as_ref()
@@ -606,7 +640,7 @@ pub fn markdown(r: &QualityResult) -> String {
             let l = m.reached[k].as_ref();
             s += &format!(
                 " {} | {} | {} | {} |",
-                opt(l.map(|l| l.wall_s), 2),
+                opt(l.map(Level::scored_wall_s), 2),
                 opt(m.interpolated_time_s[k], 2),
                 l.map_or("-".into(), |l| l.effort.to_string()),
                 opt(l.and_then(|l| l.flicker), 4)
@@ -620,7 +654,9 @@ pub fn markdown(r: &QualityResult) -> String {
             s += &format!(
                 " {} |",
                 match (a, b) {
-                    (Some(a), Some(b)) if a.wall_s > 0.0 => format!("{:.2}×", b.wall_s / a.wall_s),
+                    (Some(a), Some(b)) if a.wall_s > 0.0 => {
+                        format!("{:.2}×", b.scored_wall_s() / a.scored_wall_s())
+                    }
                     _ => "-".into(),
                 }
             );
@@ -649,15 +685,17 @@ pub fn markdown(r: &QualityResult) -> String {
     }
     for m in &r.results {
         s += &format!(
-            "\n## {}: every effort level\n\n| effort | wall (s) | CPU (s) | FLIP mean | FLIP max | relMSE | flicker |\n|---|---|---|---|---|---|---|\n",
+            "\n## {}: every effort level\n\n| effort | wall (s) | CPU (s) | frames rendered | CPU per scored frames (s) | FLIP mean | FLIP max | relMSE | flicker |\n|---|---|---|---|---|---|---|---|---|\n",
             m.method
         );
         for l in &m.levels {
             s += &format!(
-                "| {} | {:.2} | {:.2} | {:.4} | {:.4} | {:.5} | {} |\n",
+                "| {} | {:.2} | {:.2} | {} | {:.2} | {:.4} | {:.4} | {:.5} | {} |\n",
                 l.effort,
                 l.wall_s,
                 l.cpu_s,
+                l.frames_rendered,
+                l.scored_cpu_s(),
                 l.flip_mean,
                 l.flip_max,
                 l.relmse_mean,
@@ -677,6 +715,8 @@ mod tests {
             effort,
             wall_s,
             cpu_s: wall_s,
+            frames_rendered: 8,
+            frames_scored: 8,
             flip_mean: flip,
             flip_max: flip,
             relmse_mean: 0.0,
@@ -695,5 +735,21 @@ mod tests {
         let t = interpolate_time(&levels, 0.1, "mean").unwrap();
         assert!((t - 1.6).abs() < 1e-9, "{t}");
         assert_eq!(interpolate_time(&levels, 0.01, "mean"), None);
+    }
+
+    #[test]
+    fn times_are_compared_per_measured_frame() {
+        // A temporal method renders 24 frames to score 8 with whole windows: the same
+        // curve as above at three times the run's time costs the same per measured frame.
+        let whole: Vec<Level> = [2u32, 8, 32]
+            .iter()
+            .map(|&e| Level {
+                frames_rendered: 24,
+                ..level(e, 3.0 * e as f64 / 10.0, 0.4 / (e as f64).sqrt())
+            })
+            .collect();
+        let t = interpolate_cpu(&whole, 0.1, "mean").unwrap();
+        assert!((t - 1.6).abs() < 1e-9, "{t}");
+        assert!((whole[1].scored_wall_s() - 0.8).abs() < 1e-12);
     }
 }

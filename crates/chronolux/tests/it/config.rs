@@ -248,6 +248,15 @@ fn bench_quality_measures_a_subset_of_the_rendered_frames() {
     assert_eq!(j["measured"], serde_json::json!([1, 2]));
     // Frames 1 and 2 are consecutive in the render: one flicker pair.
     assert!(j["results"][0]["levels"][0]["flicker"].is_number(), "{j}");
+    // Times are compared per measured frame: 2 of the 4 rendered.
+    let l = &j["results"][0]["levels"][0];
+    assert_eq!(l["frames_rendered"], 4);
+    assert_eq!(l["frames_scored"], 2);
+    assert_eq!(
+        j["method_time_s"].as_f64().unwrap(),
+        l["wall_s"].as_f64().unwrap() * 0.5,
+        "{j}"
+    );
     fails(
         &run([
             "bench",

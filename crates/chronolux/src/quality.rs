@@ -185,6 +185,9 @@ pub struct MethodResult {
     pub interpolated_time_s: Vec<Option<f64>>,
     /// The same in process CPU seconds (the comparison to use on a shared, loaded machine).
     pub interpolated_cpu_s: Vec<Option<f64>>,
+    /// Two consecutive levels gave the same errors to the bit, so the effort does not change
+    /// this method's images here; the levels stopped there.
+    pub effort_has_no_effect: bool,
 }
 
 /// Wall time (per scored frames) at which `levels` (in increasing effort) reach `target`,
@@ -405,6 +408,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
         let mut levels: Vec<Level> = Vec::new();
         let mut reached: Vec<Option<Level>> = vec![None; targets.len()];
         let mut effort = args.start_effort;
+        let mut no_effect = false;
         loop {
             let (tech, settings, _) = config_for(
                 m,
@@ -518,6 +522,21 @@ pub fn run(args: QualityArgs) -> Result<()> {
             if reached.iter().all(Option::is_some) || effort >= args.max_effort {
                 break;
             }
+            // The same error to the bit as the level before: the effort does not reach the
+            // images (e.g. `spacetime-dept` rendering every frame as `path`, whose samples
+            // are its `spp`, not its photons). Higher levels would only cost time.
+            if let [.., a, b] = levels.as_slice()
+                && a.flip_mean == b.flip_mean
+                && a.flip_max == b.flip_max
+                && a.relmse_mean == b.relmse_mean
+            {
+                eprintln!(
+                    "{m}: effort {effort} gives the images of effort {}: here its effort does not change its images (see its run.json from `render`, e.g. frames rendered as path); stopped",
+                    a.effort
+                );
+                no_effect = true;
+                break;
+            }
             effort = (effort * 2).min(args.max_effort);
         }
         let interpolated_time_s = targets
@@ -534,6 +553,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
             reached,
             interpolated_time_s,
             interpolated_cpu_s,
+            effort_has_no_effect: no_effect,
         });
     }
 
@@ -682,6 +702,14 @@ pub fn markdown(r: &QualityResult) -> String {
             );
         }
         s += "\n";
+    }
+    for m in &r.results {
+        if m.effort_has_no_effect {
+            s += &format!(
+                "\n**{}: two efforts gave the same images; its effort does not change them here, so the levels stopped.**\n",
+                m.method
+            );
+        }
     }
     for m in &r.results {
         s += &format!(

@@ -538,4 +538,42 @@ fn a_sky_lit_skinned_model_renders_as_path_and_says_so() {
             "frame {f} differs from path's"
         );
     }
+    // `bench quality` steps spacetime-dept's photons, which do not reach these images: it
+    // stops at the second level (the same errors to the bit) instead of rendering on to
+    // --max-effort, and says so.
+    let out = run([
+        "bench",
+        "quality",
+        model,
+        "--method",
+        "spacetime-dept",
+        "--frames",
+        "0..3",
+        "--resolution",
+        "24x24",
+        "--set",
+        "spp=4",
+        // Not the reference's own samples (it is `path` at this seed, 4 spp).
+        "--seed",
+        "1",
+        "--reference",
+        path.to_str().unwrap(),
+        "--target-flip",
+        "0.00001",
+        "--start-effort",
+        "1",
+        "--max-effort",
+        "64",
+        "--json",
+    ]);
+    ok(&out);
+    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let r = &j["results"][0];
+    assert_eq!(r["effort_has_no_effect"], true, "{j}");
+    assert_eq!(r["levels"].as_array().unwrap().len(), 2, "{j}");
+    assert!(
+        stderr(&out).contains("does not change its images"),
+        "{}",
+        stderr(&out)
+    );
 }

@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
-"""Per scene: at each target FLIP both methods bracket, spacetime-dept's and dept-spatial's
-CPU seconds per scored frames (bench quality's interpolated_cpu_s: a run's CPU x scored /
-rendered frames, log-log between levels), the ratio, the photons per frame at that FLIP
-(effort interpolated log-log the same way) and the flicker of the first level reaching it."""
+"""Per scene (FILE.json of a `bench quality --baseline` run): at each target FLIP both methods
+bracket, the method's and the baseline's CPU seconds per scored frames (bench quality's
+interpolated_cpu_s: a run's CPU x scored / rendered frames, log-log between levels), the
+ratio, the effort at that FLIP (thousands of photons per frame, or samples per pixel;
+interpolated log-log the same way) and the flicker of the first level reaching it.
+Usage: summarize.py NAME... (reads NAME.json)."""
 import json, math, sys
 
 def interp(levels, target, key):
@@ -15,11 +17,15 @@ def interp(levels, target, key):
             return key(a) * (key(b) / key(a)) ** s
     return None
 
-print("| scene | FLIP | st CPU s | ds CPU s | CPU ratio | st k photons | ds k photons | photons ratio | st flicker | ds flicker |")
-print("|---|---|---|---|---|---|---|---|---|---|")
+first = True
 for sc in sys.argv[1:]:
     d = json.load(open(f"{sc}.json"))
     st, ds = d["results"]
+    if first:
+        m, b = st["method"], ds["method"]
+        print(f"| scene | FLIP | {m} CPU s | {b} CPU s | CPU ratio | {m} effort | {b} effort | effort ratio | {m} flicker | {b} flicker |")
+        print("|---|---|---|---|---|---|---|---|---|---|")
+        first = False
     for k, t in enumerate(d["targets"]):
         a, b = st["interpolated_cpu_s"][k], ds["interpolated_cpu_s"][k]
         if a is None or b is None:

@@ -2,7 +2,10 @@
 """Writes docs/scenes/glass-sun.gltf: a grey ground, a white cube and a red-glass cube
 (KHR_materials_transmission + KHR_materials_volume: attenuation colour (0.9, 0.25, 0.15) at
 0.4 m, thickness 1) lit by a 3000 lux directional sun, with a camera. Used for the pictures in
-docs/ (issue 15: coloured glass and a sun-lit scene at default settings)."""
+docs/ (issue 15: coloured glass and a sun-lit scene at default settings).
+
+`--moving OUT.gltf`: the same scene with the white cube sliding 1.2 m to the left and back
+over 2 s (LINEAR keys), a sun-lit animation for benchmarks."""
 import base64, json, math, struct, sys
 from pathlib import Path
 
@@ -91,6 +94,25 @@ doc = {
     "bufferViews": views,
     "accessors": accessors,
 }
-out = Path(sys.argv[1] if len(sys.argv) > 1 else Path(__file__).parent.parent / "docs/scenes/glass-sun.gltf")
+args = sys.argv[1:]
+if args[:1] == ["--moving"]:
+    args = args[1:]
+    times, moves = [0.0, 1.0, 2.0], [(0.0, 0.0, 0.0), (-1.2, 0.0, 0.0), (0.0, 0.0, 0.0)]
+    off = len(buf)
+    for t in times:
+        buf += struct.pack("<f", t)
+    views.append({"buffer": 0, "byteOffset": off, "byteLength": len(buf) - off})
+    accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": 3,
+                      "type": "SCALAR", "min": [0.0], "max": [2.0]})
+    off = len(buf)
+    for m in moves:
+        buf += struct.pack("<3f", *m)
+    views.append({"buffer": 0, "byteOffset": off, "byteLength": len(buf) - off})
+    accessors.append({"bufferView": len(views) - 1, "componentType": 5126, "count": 3, "type": "VEC3"})
+    doc["animations"] = [{"name": "slide", "samplers": [
+        {"input": len(accessors) - 2, "output": len(accessors) - 1, "interpolation": "LINEAR"}],
+        "channels": [{"sampler": 0, "target": {"node": 1, "path": "translation"}}]}]
+    doc["buffers"][0] = {"byteLength": len(buf), "uri": "data:application/octet-stream;base64," + base64.b64encode(bytes(buf)).decode()}
+out = Path(args[0] if args else Path(__file__).parent.parent / "docs/scenes/glass-sun.gltf")
 out.write_text(json.dumps(doc, indent=1))
 print(out)

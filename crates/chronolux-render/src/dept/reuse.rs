@@ -18,6 +18,9 @@
 //!   to vertex box, vertex box to the lights' box, each with the larger of its two boxes'
 //!   bounding radii — and a changed instance is inside a ball; a pixel is refused when a
 //!   ball touches a capsule (conservative: it refuses more than the exact test would).
+//!   A directional light (a sun) has no box, but its shadow rays are parallel: from the
+//!   vertex ball they sweep a half-cylinder of the ball's radius towards the light, and a
+//!   ball clear of it leaves them unchanged (as conservative as the capsules).
 //!
 //! The region is that of the pixel's samples in **both** frames (the union of their
 //! reaches): `g`'s own paths, traced in `g`, avoid everything that differs in `f`, so each
@@ -30,8 +33,9 @@
 //! spread is sampled by both frames' samples, and a box touched by an object that moves
 //! refuses the whole pixel, so which samples are pooled does not depend on where each
 //! one went (a test per sample would pool exactly the samples that missed the object,
-//! a biased selection). Unbounded paths (a ray leaving the scene; lights at infinity)
-//! are reused only when no instance changed.
+//! a biased selection). Unbounded paths (a ray leaving the scene) and environment lights
+//! (a sky: its shadow rays leave in every direction above a vertex) are reused only when
+//! no instance changed.
 
 use super::view::DeptView;
 use chronolux_core::color::Rgb;
@@ -208,12 +212,21 @@ pub enum Validity {
     /// The camera, a light, a material or the scene bounds changed: no pixel.
     None,
     /// Balls around the instances that changed (bounds in both frames): pixels whose
-    /// bounded reach stays clear of them. `lights`: a ball around every light, `None` when
-    /// a light is at infinity (then only unchanged scenes are reused).
+    /// bounded reach stays clear of them. `lights`: where the shadow rays go, `None` under
+    /// an environment light (then only unchanged scenes are reused).
     Clear {
         changed: Vec<(Vec3, f32)>,
-        lights: Option<(Vec3, f32)>,
+        lights: Option<LightReach>,
     },
+}
+
+/// Where the shadow rays of a scene's lights go: to a ball around every light with a
+/// position (`None` when there is none), and towards each directional light (unit
+/// directions to the light).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightReach {
+    pub local: Option<(Vec3, f32)>,
+    pub toward: Vec<Vec3>,
 }
 
 impl Validity {
@@ -236,17 +249,32 @@ impl Validity {
         }
         Validity::Clear {
             changed,
-            lights: light_ball(current),
+            lights: light_reach(current),
         }
     }
 
     /// Whether any pixel at all may pool the past frame's light (false for
-    /// [`Validity::None`], and for [`Validity::Clear`] under a light at infinity).
+    /// [`Validity::None`], and for [`Validity::Clear`] under an environment light).
     pub fn may_allow(&self) -> bool {
         match self {
             Validity::All => true,
             Validity::None => false,
             Validity::Clear { lights, .. } => lights.is_some(),
+        }
+    }
+
+    /// Whether pixels may pool the past frame's light wherever their paths stay clear of
+    /// the changes, as far as the animation tells: [`Validity::may_allow`] without a
+    /// directional light. Under a sun a pixel pools only where its paths stay inside the
+    /// scene (a ray that leaves it makes the reach unbounded): in a room, not on an open
+    /// ground whose glossy layer sends rays to the sky; the animation does not say which,
+    /// so `spacetime-dept` lets its path probe decide then.
+    pub fn may_allow_unprobed(&self) -> bool {
+        match self {
+            Validity::Clear {
+                lights: Some(l), ..
+            } => l.toward.is_empty(),
+            v => v.may_allow(),
         }
     }
 
@@ -256,7 +284,7 @@ impl Validity {
             Validity::All => true,
             Validity::None => false,
             Validity::Clear { changed, lights } => {
-                let (Reach::Bounded { origins, vertices }, Some((cl, rl))) = (reach, lights) else {
+                let (Reach::Bounded { origins, vertices }, Some(lights)) = (reach, lights) else {
                     return false;
                 };
                 let (Some((co, ro)), Some((cv, rv))) = (ball(origins), ball(vertices)) else {
@@ -264,16 +292,23 @@ impl Validity {
                 };
                 changed.iter().all(|&(c, r)| {
                     segment_distance(c, co, cv) > r + ro.max(rv)
-                        && segment_distance(c, cv, *cl) > r + rv.max(*rl)
+                        && lights
+                            .local
+                            .is_none_or(|(cl, rl)| segment_distance(c, cv, cl) > r + rv.max(rl))
+                        && lights
+                            .toward
+                            .iter()
+                            .all(|&d| half_line_distance(c, cv, d) > r + rv)
                 })
             }
         }
     }
 }
 
-/// A ball around every light of `scene`; `None` when one is at infinity.
-fn light_ball(scene: &FrameScene) -> Option<(Vec3, f32)> {
+/// Where the shadow rays of `scene`'s lights go; `None` under an environment light.
+fn light_reach(scene: &FrameScene) -> Option<LightReach> {
     let mut b = Bounds3::EMPTY;
+    let mut toward = Vec::new();
     for l in scene.lights.iter() {
         match l {
             Light::Point { p, .. } | Light::Spot { p, .. } => b.grow(*p),
@@ -282,10 +317,21 @@ fn light_ball(scene: &FrameScene) -> Option<(Vec3, f32)> {
                 b.grow(*p0 + *e1);
                 b.grow(*p0 + *e2);
             }
-            Light::Directional { .. } | Light::Environment { .. } => return None,
+            // Its light samples leave towards −dir ([`Light::sample_li`]).
+            Light::Directional { dir, .. } => toward.push(-dir.normalize_or_zero()),
+            Light::Environment { .. } => return None,
         }
     }
-    ball(&b)
+    Some(LightReach {
+        local: ball(&b),
+        toward,
+    })
+}
+
+/// Distance from `p` to the half-line from `a` along the unit direction `d`.
+fn half_line_distance(p: Vec3, a: Vec3, d: Vec3) -> f32 {
+    let t = (p - a).dot(d).max(0.0);
+    (a + d * t - p).length()
 }
 
 /// The combined frame: per pixel, the current frame's elements' term plus its per-pixel
@@ -338,23 +384,67 @@ mod tests {
     fn a_change_away_from_the_paths_keeps_the_pixel_and_one_on_them_refuses_it() {
         // Camera at the origin, a floor point at (0, −1, −5), a lamp at (0, 3, −5).
         let reach = bounded(Vec3::ZERO, &[Vec3::new(0.0, -1.0, -5.0)]);
-        let lights = Some((Vec3::new(0.0, 3.0, -5.0), 0.1));
+        let lights = Some(LightReach {
+            local: Some((Vec3::new(0.0, 3.0, -5.0), 0.1)),
+            toward: vec![],
+        });
         let far = Validity::Clear {
             changed: vec![(Vec3::new(5.0, -1.0, -5.0), 0.5)],
-            lights,
+            lights: lights.clone(),
         };
         assert!(far.allows(&reach));
         // On the shadow ray (floor → lamp) and on the camera ray.
         for c in [Vec3::new(0.2, 1.0, -5.0), Vec3::new(0.0, -0.5, -2.5)] {
             let v = Validity::Clear {
                 changed: vec![(c, 0.3)],
-                lights,
+                lights: lights.clone(),
             };
             assert!(!v.allows(&reach), "{c}");
         }
         assert!(!far.allows(&Reach::Unbounded));
         assert!(Validity::All.allows(&Reach::Unbounded));
         assert!(!Validity::None.allows(&reach));
+        // Under a sky, no pixel of a changed scene.
+        let sky = Validity::Clear {
+            changed: vec![(Vec3::new(5.0, -1.0, -5.0), 0.5)],
+            lights: None,
+        };
+        assert!(!sky.may_allow() && !sky.allows(&reach));
+    }
+
+    #[test]
+    fn a_sun_refuses_a_pixel_only_for_a_change_on_its_shadow_rays() {
+        // The floor point (0, −1, −5) seen from the origin, a sun straight above and
+        // tilted towards +x: its shadow rays leave along (1, 2, 0) / √5.
+        let reach = bounded(Vec3::ZERO, &[Vec3::new(0.0, -1.0, -5.0)]);
+        let d = Vec3::new(1.0, 2.0, 0.0).normalize();
+        let sun = |c: Vec3| Validity::Clear {
+            changed: vec![(c, 0.3)],
+            lights: Some(LightReach {
+                local: None,
+                toward: vec![d],
+            }),
+        };
+        // High up on the shadow ray (far beyond any light box): refused.
+        assert!(!sun(Vec3::new(0.0, -1.0, -5.0) + d * 50.0).allows(&reach));
+        // The same height straight above, off the tilted ray; below the floor point, on
+        // the ray's backward extension; beside it: kept.
+        for c in [
+            Vec3::new(0.0, 99.0, -5.0),
+            Vec3::new(-1.0, -3.0, -5.0),
+            Vec3::new(3.0, -1.0, -5.0),
+        ] {
+            assert!(sun(c).allows(&reach), "{c}");
+            // Some pixels may pool; whether many do, the path probe decides.
+            assert!(sun(c).may_allow() && !sun(c).may_allow_unprobed());
+        }
+    }
+
+    #[test]
+    fn half_line_distance_is_euclidean() {
+        let (a, d) = (Vec3::ZERO, Vec3::X);
+        assert_eq!(half_line_distance(Vec3::new(5.0, 2.0, 0.0), a, d), 2.0);
+        assert_eq!(half_line_distance(Vec3::new(-3.0, 4.0, 0.0), a, d), 5.0);
     }
 
     #[test]

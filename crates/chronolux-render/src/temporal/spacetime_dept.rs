@@ -64,8 +64,8 @@
 //! A frame gains over path tracing at the same camera samples only by its pooled
 //! per-pixel light and by the elements' indirect light. When no frame within
 //! `light_history` on either side can pool light with it (decided from the animation:
-//! [`Validity::may_allow`], false under a sky while anything moves and under a moving
-//! camera) and the **path probe** of its block of `window` frames
+//! [`Validity::may_allow_unprobed`], false under a sky or a sun while anything moves and
+//! under a moving camera) and the **path probe** of its block of `window` frames
 //! ([`crate::temporal::probe`]: the path tracer's relative variance with and without its
 //! indirect part, on every 8th row of the block's first frame) finds that indirect light
 //! adds at most 10 % to path tracing's noise, the frame is rendered by the path tracer at
@@ -662,7 +662,7 @@ impl SpacetimeDept {
             } else {
                 Validity::between(scene, &sg)
             };
-            if v.may_allow() {
+            if v.may_allow_unprobed() {
                 return Err(None);
             }
         }

@@ -153,7 +153,10 @@ pub struct RenderArgs {
     /// Blender's default) or `standard` (clamp and sRGB curve). The EXR is never altered.
     #[arg(long, value_name = "agx|standard", value_parser = parse_view)]
     pub view: Option<chronolux_io::image::View>,
-    /// Skip frames whose EXR and PNG are already complete in the output folder.
+    /// Skip frames whose EXR and PNG are already complete (and recorded in run.json) in the
+    /// output folder; settings must match the earlier run's. A technique that carries light
+    /// from frame to frame without a window (ic-static-dynamic, ic-selective, spt) renders
+    /// the complete frames before the last missing one again, the same bits, for its history.
     #[arg(long)]
     pub resume: bool,
     /// Do not write the animated preview.

@@ -1,5 +1,5 @@
 #!/bin/bash
-# References for run.sh and run-stbpt.sh: frames 8..16 at 64², max depth 8, chronolux reference
+# References for run.sh (both modes): frames 8..16 at 64², max depth 8, chronolux reference
 # (relMSE 5e-5 or 4096 spp), one thread each, into $REFS/{demo,dolly,rigged,cm}.
 B=${B:?chronolux binary}
 REFS=${REFS:?output folder}

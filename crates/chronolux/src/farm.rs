@@ -160,21 +160,14 @@ impl SegmentRun {
     pub fn manifest_name(&self) -> String {
         format!("run.segment-{:04}.json", self.index)
     }
-
-    /// For a stateful technique, the last frame that must be rendered (every frame before
-    /// it is, in order, so that the history is whole): the last owned frame not yet
-    /// `done` (with --resume: complete and recorded, as the render's own test), else the
-    /// last owned frame. `None` for the others.
-    pub fn warm_up_until(&self, done: impl Fn(u32) -> bool, resume: bool) -> Option<u32> {
-        warm_up_until(&self.owned, self.render_before, done, resume)
-    }
 }
 
 /// For a stateful technique (`render_before`) writing `owned` (ascending), the last frame
 /// that must be rendered, every frame before it rendered too, in order, so that the history
 /// is that of an uninterrupted run: the last owned frame not yet `done` (with --resume),
-/// else the last owned frame; 0 when every frame is done. `None` for the others. A whole
-/// `render --resume` is one segment owning every frame.
+/// else the last owned frame; 0 when every frame is done. `None` for the others. A farm
+/// segment owns its frames (`done`: complete and recorded, as the render's own test); a
+/// whole `render --resume` is one segment owning every frame.
 pub fn warm_up_until(
     owned: &[u32],
     render_before: bool,

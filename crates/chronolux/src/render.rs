@@ -373,15 +373,14 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     // stateful technique resumed renders its history again, as a farm segment does, so
     // that a resumed render equals an uninterrupted one bit for bit.
     let done = |f| sink.is_complete(f) && manifest.frame(f).is_some();
-    let warm_up_until = match &exec.segment {
-        Some(s) => s.warm_up_until(done, exec.resume),
-        None => crate::farm::warm_up_until(
-            &frames,
+    let (owned, render_before) = match &exec.segment {
+        Some(s) => (&s.owned[..], s.render_before),
+        None => (
+            &frames[..],
             registry::frame_context(tech, &config.technique).render_before,
-            done,
-            exec.resume,
         ),
     };
+    let warm_up_until = crate::farm::warm_up_until(owned, render_before, done, exec.resume);
     if exec.resume
         && exec.segment.is_none()
         && let Some(u) = warm_up_until
@@ -458,8 +457,8 @@ pub struct DiskSink<'a> {
     pub resume: bool,
     /// A farm segment's own frames (the others are computed, not written).
     pub owned: Option<Vec<u32>>,
-    /// A stateful technique's segment renders (without writing) every frame before this
-    /// one: its history.
+    /// A stateful technique renders every frame before this one, its history (a segment's
+    /// frames not its own are not written; its own and a resumed render's are, again).
     pub warm_up_until: Option<u32>,
     /// Denoise the beauty with this quality (the noisy one becomes a layer).
     pub denoise: Option<crate::denoise::DenoiseQuality>,
@@ -470,8 +469,8 @@ pub struct DiskSink<'a> {
 
 impl run::FrameSink for DiskSink<'_> {
     fn needs(&self, frame: u32) -> bool {
-        // A stateful technique's segment renders every frame before the last one it must
-        // render, in order, its own complete frames included (written again, the same
+        // A stateful technique (a farm segment, or a whole resumed render) renders every
+        // frame before the last one it must render, in order, its own complete frames included (written again, the same
         // bits), so that the history is that of an uninterrupted run.
         if self.warm_up_until.is_some_and(|u| frame < u) {
             return true;

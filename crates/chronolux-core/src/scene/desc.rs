@@ -462,6 +462,34 @@ pub struct Channel {
 }
 
 impl SceneDesc {
+    /// Adds a white punctual light of `kind` and `intensity` (candela, or lux for a
+    /// directional light) on a new root node `name` placed by `transform` (a light shines
+    /// along its node's −Z); returns that node.
+    pub fn add_light(
+        &mut self,
+        name: &str,
+        intensity: f32,
+        kind: LightKind,
+        transform: Trs,
+    ) -> NodeId {
+        let light = LightId(self.lights.len() as u32);
+        self.lights.push(LightDesc {
+            name: name.into(),
+            color: Rgb::ONE,
+            intensity,
+            kind,
+        });
+        let node = NodeId(self.nodes.len() as u32);
+        self.nodes.push(Node {
+            name: name.into(),
+            light: Some(light),
+            transform,
+            ..Default::default()
+        });
+        self.roots.push(node);
+        node
+    }
+
     /// Node ids in an order where every parent precedes its children (roots in order).
     pub fn topological_order(&self) -> Vec<NodeId> {
         let mut out = Vec::with_capacity(self.nodes.len());

@@ -7,8 +7,8 @@ use chronolux_core::color::Rgb;
 use chronolux_core::math::{Mat4, Vec3, Vec4};
 use chronolux_core::scene::delta::{FrameDelta, dynamic_instances};
 use chronolux_core::scene::desc::{
-    Animation, AnimationId, Channel, ChannelTarget, Interpolation, LightDesc, LightId, LightKind,
-    Material, MaterialId, Mesh, MeshId, MorphTarget, Node, NodeId, SceneDesc, Skin, SkinId,
+    Animation, AnimationId, Channel, ChannelTarget, Interpolation, LightKind, Material, MaterialId,
+    Mesh, MeshId, MorphTarget, Node, NodeId, SceneDesc, Skin, SkinId, Trs,
 };
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};
 use chronolux_core::scene::source::FrameSource;
@@ -258,19 +258,7 @@ fn segment_dynamic_set_is_the_union_of_pairwise_changes() {
 fn light_material_and_camera_changes_are_detected() {
     // An animated point light on the demo's clip.
     let mut desc = stage::demo();
-    let node = NodeId(desc.nodes.len() as u32);
-    desc.lights.push(LightDesc {
-        name: "bulb".into(),
-        color: Rgb::ONE,
-        intensity: 3.0,
-        kind: LightKind::Point,
-    });
-    desc.nodes.push(Node {
-        name: "bulb".into(),
-        light: Some(LightId(desc.lights.len() as u32 - 1)),
-        ..Default::default()
-    });
-    desc.roots.push(node);
+    let node = desc.add_light("bulb", 3.0, LightKind::Point, Trs::default());
     desc.animations[0].channels.push(Channel {
         node,
         target: ChannelTarget::Translation,

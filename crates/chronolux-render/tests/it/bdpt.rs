@@ -7,7 +7,7 @@ use chronolux_core::color::Rgb;
 use chronolux_core::light::Environment;
 use chronolux_core::math::{Quat, Vec3};
 use chronolux_core::scene::desc::{
-    LightDesc, LightId, LightKind, Material, Mesh, MeshId, Node, NodeId, SceneDesc, Trs,
+    LightKind, Material, Mesh, MeshId, Node, NodeId, SceneDesc, Trs,
 };
 use chronolux_core::scene::stage;
 use chronolux_core::scene::testing::furnace;
@@ -142,24 +142,16 @@ fn point_light_glass() -> SceneDesc {
     for m in &mut d.materials {
         m.emissive = Rgb::ZERO;
     }
-    d.lights.push(LightDesc {
-        name: "point".into(),
-        color: Rgb::ONE,
-        intensity: 3.0,
-        kind: LightKind::Point,
-    });
     let top = 2.0 * stage::ROOM_HALF;
-    let light_node = NodeId(d.nodes.len() as u32);
-    d.nodes.push(Node {
-        name: "point_light".into(),
-        light: Some(LightId(d.lights.len() as u32 - 1)),
-        transform: Trs {
+    d.add_light(
+        "point_light",
+        3.0,
+        LightKind::Point,
+        Trs {
             translation: Vec3::new(0.0, top - 0.15, 0.0),
             ..Default::default()
         },
-        ..Default::default()
-    });
-    d.roots.push(light_node);
+    );
     let mut shade = stage::cube_primitive(1.0);
     d.materials
         .push(Material::diffuse("shade", Rgb::splat(0.6)));
@@ -244,28 +236,20 @@ fn bdpt_agrees_with_path_tracer_with_gradient_environment_and_backdrop() {
 fn environment_and_spot(env: Environment, what: &str) {
     let mut d = stage::demo();
     d.environment = Some(env);
-    d.lights.push(LightDesc {
-        name: "spot".into(),
-        color: Rgb::ONE,
-        intensity: 2.0,
-        kind: LightKind::Spot {
+    d.add_light(
+        "spot",
+        2.0,
+        LightKind::Spot {
             inner_cone: 0.2,
             outer_cone: 0.35,
         },
-    });
-    let node = NodeId(d.nodes.len() as u32);
-    d.nodes.push(Node {
-        name: "spot".into(),
-        light: Some(LightId(d.lights.len() as u32 - 1)),
-        transform: Trs {
+        Trs {
             // Above the floor's front-left, pointing straight down (local −Z to −Y).
             translation: Vec3::new(-0.5, 1.5, 0.6),
             rotation: Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2),
             ..Default::default()
         },
-        ..Default::default()
-    });
-    d.roots.push(node);
+    );
     let scene = frame0(d, 32, 32);
     let reference = pt(1024, None).render(&scene, 0, &|_| {});
     let img = bdpt(256, None, MisHeuristic::Power).render(&scene, 0, &|_| {});

@@ -1011,25 +1011,17 @@ fn spacetime_dept_pools_sunlight_where_the_moving_cube_stays_off_the_shadow_rays
         .collect();
     assert_eq!(drop.len(), 2, "the demo's ceiling and lamp");
     d.roots.retain(|r| !drop.contains(r));
-    let light = LightId(d.lights.len() as u32);
-    d.lights.push(LightDesc {
-        name: "sun".into(),
-        color: Rgb::ONE,
-        intensity: 3.0,
-        kind: LightKind::Directional,
-    });
     // A light shines along its node's −Z: turned by −1.2 rad about +X it travels along
     // (0, −0.93, −0.36), down and towards the back wall.
-    d.nodes.push(Node {
-        name: "sun".into(),
-        light: Some(light),
-        transform: Trs {
+    d.add_light(
+        "sun",
+        3.0,
+        LightKind::Directional,
+        Trs {
             rotation: glam::Quat::from_rotation_x(-1.2),
             ..Default::default()
         },
-        ..Default::default()
-    });
-    d.roots.push(NodeId(d.nodes.len() as u32 - 1));
+    );
     pooled_light_agrees_with_the_frames_own(d);
 }
 

@@ -31,9 +31,7 @@ use anyhow::{Context, Result, bail};
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::math::Vec3;
 use chronolux_core::scene::delta::FrameDelta;
-use chronolux_core::scene::desc::{
-    AnimationId, Material, MaterialId, Mesh, MeshId, Node, NodeId, Primitive, SceneDesc, Trs,
-};
+use chronolux_core::scene::desc::{AnimationId, Material, MaterialId, SceneDesc, Trs};
 use chronolux_core::scene::frame::{FrameBuilder, FrameScene};
 use chronolux_core::scene::stage::{ROOM_HALF, cube_primitive};
 use chronolux_render::dept::element_map::{ElementAccumulators, FrameElements};
@@ -75,34 +73,6 @@ pub struct UpdateArgs {
     /// Print one JSON document instead of text.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Adds root node `name` with `prim` (made movable by [`configurations`]).
-fn push_rigid(
-    d: &mut SceneDesc,
-    name: &str,
-    prim: Primitive,
-    material: MaterialId,
-    trs: Trs,
-) -> NodeId {
-    let mesh = MeshId(d.meshes.len() as u32);
-    d.meshes.push(Mesh {
-        name: name.into(),
-        primitives: vec![Primitive {
-            material: Some(material),
-            ..prim
-        }],
-        weights: Vec::new(),
-    });
-    let node = NodeId(d.nodes.len() as u32);
-    d.nodes.push(Node {
-        name: name.into(),
-        transform: trs,
-        mesh: Some(mesh),
-        ..Default::default()
-    });
-    d.roots.push(node);
-    node
 }
 
 /// Configurations A and B of `change` at the camera and animation of `input`.
@@ -148,8 +118,7 @@ fn configurations(
                 d.materials
                     .push(Material::diffuse("bench_occluder", Rgb::splat(0.73)));
                 let m = MaterialId(d.materials.len() as u32 - 1);
-                push_rigid(
-                    &mut d,
+                d.add_mesh(
                     "bench_occluder",
                     cube_primitive(0.25 * ROOM_HALF),
                     m,

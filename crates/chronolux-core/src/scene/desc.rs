@@ -479,15 +479,46 @@ impl SceneDesc {
             intensity,
             kind,
         });
-        let node = NodeId(self.nodes.len() as u32);
-        self.nodes.push(Node {
+        self.add_root(Node {
             name: name.into(),
             light: Some(light),
             transform,
             ..Default::default()
+        })
+    }
+
+    /// Adds a mesh `name` of the one primitive `prim` with `material` on a new root node
+    /// `name` placed by `transform`; returns that node.
+    pub fn add_mesh(
+        &mut self,
+        name: &str,
+        prim: Primitive,
+        material: MaterialId,
+        transform: Trs,
+    ) -> NodeId {
+        let mesh = MeshId(self.meshes.len() as u32);
+        self.meshes.push(Mesh {
+            name: name.into(),
+            primitives: vec![Primitive {
+                material: Some(material),
+                ..prim
+            }],
+            weights: Vec::new(),
         });
-        self.roots.push(node);
-        node
+        self.add_root(Node {
+            name: name.into(),
+            transform,
+            mesh: Some(mesh),
+            ..Default::default()
+        })
+    }
+
+    /// Adds `node` as a new root; returns its id.
+    pub fn add_root(&mut self, node: Node) -> NodeId {
+        let id = NodeId(self.nodes.len() as u32);
+        self.nodes.push(node);
+        self.roots.push(id);
+        id
     }
 
     /// Node ids in an order where every parent precedes its children (roots in order).

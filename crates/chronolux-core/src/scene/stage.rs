@@ -9,8 +9,7 @@
 use super::anim::{deform_primitive, pose_at};
 use super::desc::{
     Animation, CameraDesc, CameraId, Channel, ChannelTarget, Interpolation, LightId, Material,
-    MaterialId, Mesh, MeshId, Node, NodeId, Primitive, Projection, SceneDesc, SkinId, TextureRef,
-    Trs,
+    MaterialId, MeshId, Node, NodeId, Primitive, Projection, SceneDesc, SkinId, TextureRef, Trs,
 };
 use crate::color::Rgb;
 use crate::math::{Quat, Vec2, Vec3};
@@ -43,33 +42,6 @@ fn quad(p: [Vec3; 4], normal: Vec3) -> Primitive {
         indices: vec![[0, 1, 2], [0, 2, 3]],
         ..Default::default()
     }
-}
-
-fn push_mesh(
-    desc: &mut SceneDesc,
-    name: &str,
-    prim: Primitive,
-    material: MaterialId,
-    transform: Trs,
-) -> NodeId {
-    let mesh = MeshId(desc.meshes.len() as u32);
-    desc.meshes.push(Mesh {
-        name: name.into(),
-        primitives: vec![Primitive {
-            material: Some(material),
-            ..prim
-        }],
-        weights: Vec::new(),
-    });
-    let node = NodeId(desc.nodes.len() as u32);
-    desc.nodes.push(Node {
-        name: name.into(),
-        transform,
-        mesh: Some(mesh),
-        ..Default::default()
-    });
-    desc.roots.push(node);
-    node
 }
 
 fn push_material(desc: &mut SceneDesc, m: Material) -> MaterialId {
@@ -111,27 +83,27 @@ pub fn cornell_box() -> SceneDesc {
         [v(-h, 0.0, -h), v(h, 0.0, -h), v(h, 0.0, h), v(-h, 0.0, h)],
         Vec3::Y,
     );
-    push_mesh(&mut d, "floor", floor, white, id);
+    d.add_mesh("floor", floor, white, id);
     let ceiling = quad(
         [v(-h, top, -h), v(h, top, -h), v(h, top, h), v(-h, top, h)],
         -Vec3::Y,
     );
-    push_mesh(&mut d, "ceiling", ceiling, white, id);
+    d.add_mesh("ceiling", ceiling, white, id);
     let back = quad(
         [v(-h, 0.0, -h), v(h, 0.0, -h), v(h, top, -h), v(-h, top, -h)],
         Vec3::Z,
     );
-    push_mesh(&mut d, "back_wall", back, white, id);
+    d.add_mesh("back_wall", back, white, id);
     let left = quad(
         [v(-h, 0.0, -h), v(-h, 0.0, h), v(-h, top, h), v(-h, top, -h)],
         Vec3::X,
     );
-    push_mesh(&mut d, "left_wall", left, red, id);
+    d.add_mesh("left_wall", left, red, id);
     let right = quad(
         [v(h, 0.0, -h), v(h, 0.0, h), v(h, top, h), v(h, top, -h)],
         -Vec3::X,
     );
-    push_mesh(&mut d, "right_wall", right, green, id);
+    d.add_mesh("right_wall", right, green, id);
     // Light: the classic 130 × 105 of a 556 room, 1 % of the height below the ceiling.
     let (lx, lz, ly) = (0.235 * h, 0.19 * h, top - 0.01 * top);
     let lamp = quad(
@@ -143,7 +115,7 @@ pub fn cornell_box() -> SceneDesc {
         ],
         -Vec3::Y,
     );
-    push_mesh(&mut d, "ceiling_light", lamp, light, id);
+    d.add_mesh("ceiling_light", lamp, light, id);
     d.cameras.push(CameraDesc {
         name: "stage_camera".into(),
         projection: Projection::Perspective {
@@ -430,22 +402,19 @@ pub fn demo() -> SceneDesc {
     };
     let half = 0.2 * ROOM_HALF;
     let y0 = half;
-    let cube = push_mesh(
-        &mut d,
+    let cube = d.add_mesh(
         "sliding_cube",
         cube_primitive(half),
         glossy,
         at(Vec3::new(-0.6, y0, 0.35) * ROOM_HALF),
     );
-    push_mesh(
-        &mut d,
+    d.add_mesh(
         "metal_sphere",
         uv_sphere(r, 32, 24),
         metal,
         at(Vec3::new(-0.45, 0.35, -0.4) * ROOM_HALF),
     );
-    push_mesh(
-        &mut d,
+    d.add_mesh(
         "glass_sphere",
         uv_sphere(r, 32, 24),
         glass,
@@ -522,8 +491,7 @@ pub fn caustic() -> SceneDesc {
         ..Default::default()
     };
     let (x0, x1, z) = (-0.25 * ROOM_HALF, 0.25 * ROOM_HALF, 0.05 * ROOM_HALF);
-    let sphere = push_mesh(
-        &mut d,
+    let sphere = d.add_mesh(
         "glass_sphere",
         uv_sphere(r, 48, 32),
         glass,
@@ -533,8 +501,7 @@ pub fn caustic() -> SceneDesc {
     // the lamp nor the camera sees it) until it enters.
     let hidden = Vec3::new(0.0, -0.5 * ROOM_HALF, 0.0);
     let shown = Vec3::new(0.0, 1.45 * ROOM_HALF, 0.0);
-    let occluder = push_mesh(
-        &mut d,
+    let occluder = d.add_mesh(
         "occluder",
         cube_primitive(0.25 * ROOM_HALF),
         white,
@@ -636,7 +603,7 @@ pub fn builtin(name: &str) -> Option<SceneDesc> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::desc::{AnimationId, Skin};
+    use crate::scene::desc::{AnimationId, Mesh, Skin};
 
     /// A small content scene: two nodes (parent translated far away, child with a mesh),
     /// a material, an animation on the child.

@@ -67,6 +67,18 @@ fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
         .collect()
 }
 
+/// Keeps in `dir`'s run.json only the records of the frames `keep` accepts (what a run
+/// killed before recording the others leaves).
+fn keep_records(dir: &Path, keep: impl Fn(u64) -> bool) {
+    let path = dir.join("run.json");
+    let mut m: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    m["frames"]
+        .as_array_mut()
+        .unwrap()
+        .retain(|r| keep(r["frame"].as_u64().unwrap()));
+    std::fs::write(&path, serde_json::to_vec_pretty(&m).unwrap()).unwrap();
+}
+
 /// Frame files are whole (they decode) and only finished files carry a frame's name.
 fn check_consistent(dir: &Path, why: &str) {
     for e in std::fs::read_dir(dir).unwrap() {
@@ -201,13 +213,7 @@ fn sigkill_at_random_moments_then_resume_equals_an_uninterrupted_render() {
 fn resume_renders_a_frame_again_whose_record_is_missing() {
     let dir = temp_dir("kill-record");
     ok(&run(args(&dir)));
-    let path = dir.join("run.json");
-    let mut m: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
-    m["frames"]
-        .as_array_mut()
-        .unwrap()
-        .retain(|r| r["frame"] != 3);
-    std::fs::write(&path, serde_json::to_vec_pretty(&m).unwrap()).unwrap();
+    keep_records(&dir, |f| f != 3);
     let before = contents(&dir);
     let out = ok(&run(args(&dir)));
     // Frame 3 rendered again, the others skipped.
@@ -260,13 +266,7 @@ fn a_resumed_stateful_render_rebuilds_its_history_and_equals_an_uninterrupted_on
             }
         }
     }
-    let path = dir.join("run.json");
-    let mut m: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
-    m["frames"]
-        .as_array_mut()
-        .unwrap()
-        .retain(|r| r["frame"].as_u64().unwrap() < 3);
-    std::fs::write(&path, serde_json::to_vec_pretty(&m).unwrap()).unwrap();
+    keep_records(&dir, |f| f < 3);
     let out = ok(&run(args(&dir)));
     assert!(out.contains("rendered again"), "{out}");
     assert!(

@@ -34,6 +34,7 @@
 
 use super::desc::{Material, Projection};
 use super::frame::{FrameScene, GeometryData};
+use crate::accel::TriRef;
 use crate::camera::Camera;
 use crate::light::Light;
 use crate::math::{Affine3A, Vec2, Vec3, Vec4};
@@ -204,6 +205,46 @@ impl FrameDelta {
         self.instance_changed(scene.geometry_instance[g as usize] as usize)
     }
 
+    /// Triangle `tri` (of geometry `tri.geometry` in frame `a`) is not the same surface in
+    /// frames `a` and `b`, the delta's two frames in either order. Finer than
+    /// [`FrameDelta::geometry_changed`] on deformed meshes: a skinned or morphed mesh
+    /// changes only where its vertices move, and a triangle whose three vertices have
+    /// bit-identical data (positions, normals, tangents, uvs) under the same indices,
+    /// material and placement in both frames is the same surface: every ray meets it at
+    /// the same point with the same barycentrics, and it shades the same, whatever its
+    /// neighbours do. (A BLAS is a function of its triangles, and triangle intersection
+    /// reads only the triangle's own vertices.) An instance that moved changes all its
+    /// triangles; one neither moved nor deformed none. For a delta made by
+    /// [`FrameDelta::between`]`(a, b)` (a delta [`FrameDelta::over`] a segment says nothing
+    /// about the frames between its ends).
+    pub fn triangle_changed(&self, a: &FrameScene, b: &FrameScene, tri: TriRef) -> bool {
+        let g = tri.geometry as usize;
+        let Some(&inst) = a.geometry_instance.get(g) else {
+            return true;
+        };
+        let i = inst as usize;
+        if self.moved.get(i).is_none_or(|&m| m) {
+            return true;
+        }
+        if !self.deformed[i] {
+            return false;
+        }
+        let (Some(x), Some(y)) = (a.geometry.get(g), b.geometry.get(g)) else {
+            return true;
+        };
+        if b.geometry_instance.get(g) != Some(&inst)
+            || x.material != y.material
+            || x.world_space != y.world_space
+        {
+            return true;
+        }
+        let t = tri.triangle as usize;
+        match (x.indices.get(t), y.indices.get(t)) {
+            (Some(ix), Some(iy)) if ix == iy => !ix.iter().all(|&v| same_vertex(x, y, v as usize)),
+            _ => true,
+        }
+    }
+
     /// Light `l` differs: any field of its evaluated value (position, direction,
     /// intensity, cone, triangle, ...) bitwise; for a light at infinity (directional or
     /// environment) also the scene's bounding sphere, which its emission and sampling use.
@@ -330,6 +371,24 @@ fn same_geometry(a: &GeometryData, b: &GeometryData) -> bool {
         && a.uvs[0].bit_eq(&b.uvs[0])
         && a.uvs[1].bit_eq(&b.uvs[1])
         && a.indices.bit_eq(&b.indices)
+}
+
+/// Vertex `v`'s data (everything a triangle's intersection and shading read) is the same
+/// in both geometries; a vertex missing from either differs.
+fn same_vertex(a: &GeometryData, b: &GeometryData, v: usize) -> bool {
+    fn at<T: BitEq + Copy>(x: &Option<Arc<Vec<T>>>, y: &Option<Arc<Vec<T>>>, v: usize) -> bool {
+        match (x, y) {
+            (None, None) => true,
+            (Some(x), Some(y)) => x.get(v).copied().bit_eq(&y.get(v).copied()),
+            _ => false,
+        }
+    }
+    let p = (a.positions.get(v), b.positions.get(v));
+    matches!(p, (Some(p), Some(q)) if p.bit_eq(q))
+        && at(&a.normals, &b.normals, v)
+        && at(&a.tangents, &b.tangents, v)
+        && at(&a.uvs[0], &b.uvs[0], v)
+        && at(&a.uvs[1], &b.uvs[1], v)
 }
 
 fn is_infinite(l: &Light) -> bool {

@@ -1,6 +1,7 @@
 //! Scenes built in code: a Cornell room ([`cornell_box`]), a way to place any scene inside
-//! it ([`cornell_stage`]), the built-in demo animation ([`demo`]) and a caustic scene with
-//! an abrupt change ([`caustic`]).
+//! it ([`cornell_stage`]), the built-in demo animation ([`demo`]), a caustic scene with
+//! an abrupt change ([`caustic`]), the demo under a moving camera ([`dolly`]) and a
+//! partly deforming skinned banner ([`banner`]).
 //!
 //! The room spans x, z ∈ [-1, 1], y ∈ [0, 2] (y up); the front (z = +1) is open and the
 //! camera looks down −Z into it from z ≈ 3.9. It is lit only by an emissive quad just below
@@ -587,15 +588,118 @@ pub fn dolly() -> SceneDesc {
     d
 }
 
-/// Names of the built-in scenes ([`builtin`]).
-pub const BUILTIN_SCENES: [&str; 3] = ["demo", "caustic", "dolly"];
+/// Quads across and down the [`banner`]; the upper half of the rows is still.
+pub const BANNER_COLUMNS: u32 = 8;
+pub const BANNER_ROWS: u32 = 12;
 
-/// A built-in scene by name (`demo`, `caustic`, `dolly`).
+/// The Cornell room with a skinned red banner hanging in front of the back wall (x ∈
+/// [−0.5, 0.5], y from 1.8 down to 0.4, z = −0.7), over [`DEMO_DURATION`]: its upper
+/// half is bound to a joint that never moves, its lower half to a second joint that
+/// turns about the banner's middle line, swinging the lower edge out towards the camera
+/// (by up to 40°) and back, with weights growing linearly to 1 at the bottom edge, so the
+/// cloth bends smoothly. The mesh deforms in every frame, yet its upper half is the same
+/// surface in every frame ([`FrameDelta::triangle_changed`](super::delta::FrameDelta::triangle_changed)),
+/// as the still parts of a character are while one limb moves: the scene for reuse on
+/// the still part of a deforming mesh.
+pub fn banner() -> SceneDesc {
+    let mut d = cornell_box();
+    d.name = "banner".into();
+    let cloth = push_material(
+        &mut d,
+        Material {
+            double_sided: true,
+            ..Material::diffuse("banner", Rgb::new(0.7, 0.12, 0.1))
+        },
+    );
+    let h = ROOM_HALF;
+    let (cols, rows) = (BANNER_COLUMNS, BANNER_ROWS);
+    let (x0, x1, top, bottom, z) = (-0.5 * h, 0.5 * h, 1.8 * h, 0.4 * h, -0.7 * h);
+    let mid = 0.5 * (top + bottom);
+    let mut positions = Vec::new();
+    let mut weights = Vec::new();
+    for r in 0..=rows {
+        let y = top + (bottom - top) * r as f32 / rows as f32;
+        // Joint 1's weight: 0 down to the middle row, then growing to 1.
+        let w = ((r as f32 - 0.5 * rows as f32) / (0.5 * rows as f32)).max(0.0);
+        for c in 0..=cols {
+            positions.push(Vec3::new(x0 + (x1 - x0) * c as f32 / cols as f32, y, z));
+            weights.push(crate::math::Vec4::new(1.0 - w, w, 0.0, 0.0));
+        }
+    }
+    let at = |r: u32, c: u32| r * (cols + 1) + c;
+    let mut indices = Vec::new();
+    for r in 0..rows {
+        for c in 0..cols {
+            let (a, b, e, f) = (at(r, c), at(r, c + 1), at(r + 1, c + 1), at(r + 1, c));
+            // Wound so that the geometric normal faces +Z (the camera).
+            indices.push([a, f, e]);
+            indices.push([a, e, b]);
+        }
+    }
+    let n = positions.len();
+    let prim = Primitive {
+        positions,
+        normals: Some(vec![Vec3::Z; n]),
+        indices,
+        joints: Some(vec![[0, 1, 0, 0]; n]),
+        joint_weights: Some(weights),
+        ..Default::default()
+    };
+    let mesh_node = d.add_mesh("banner", prim, cloth, Trs::default());
+    let still = d.add_root(Node {
+        name: "banner_still_joint".into(),
+        ..Default::default()
+    });
+    let pivot = Vec3::new(0.0, mid, z);
+    let swing = d.add_root(Node {
+        name: "banner_swing_joint".into(),
+        transform: Trs {
+            translation: pivot,
+            ..Default::default()
+        },
+        ..Default::default()
+    });
+    d.skins.push(super::desc::Skin {
+        name: "banner".into(),
+        joints: vec![still, swing],
+        inverse_bind_matrices: vec![
+            crate::math::Mat4::IDENTITY,
+            crate::math::Mat4::from_translation(-pivot),
+        ],
+    });
+    d.nodes[mesh_node.index()].skin = Some(SkinId(d.skins.len() as u32 - 1));
+    // A turn by −θ about +X moves points below the pivot towards +Z.
+    let rotation: Vec<f32> = [0.0f32, -0.7, 0.0]
+        .iter()
+        .flat_map(|&a| {
+            let q = Quat::from_rotation_x(a);
+            [q.x, q.y, q.z, q.w]
+        })
+        .collect();
+    d.animations.push(Animation {
+        name: "banner".into(),
+        channels: vec![Channel {
+            node: swing,
+            target: ChannelTarget::Rotation,
+            interpolation: Interpolation::Linear,
+            times: vec![0.0, 0.5 * DEMO_DURATION, DEMO_DURATION],
+            values: rotation,
+            components: 4,
+        }],
+    });
+    d
+}
+
+/// Names of the built-in scenes ([`builtin`]).
+pub const BUILTIN_SCENES: [&str; 4] = ["demo", "caustic", "dolly", "banner"];
+
+/// A built-in scene by name (`demo`, `caustic`, `dolly`, `banner`).
 pub fn builtin(name: &str) -> Option<SceneDesc> {
     match name {
         "demo" => Some(demo()),
         "caustic" => Some(caustic()),
         "dolly" => Some(dolly()),
+        "banner" => Some(banner()),
         _ => None,
     }
 }

@@ -3,6 +3,7 @@
 //! are checked in chronolux-render's tests, which can load glTF), plus segments and
 //! light/material/camera changes made by modifying the scene description.
 
+use chronolux_core::accel::TriRef;
 use chronolux_core::color::Rgb;
 use chronolux_core::math::{Mat4, Vec3, Vec4};
 use chronolux_core::scene::delta::{FrameDelta, dynamic_instances};
@@ -28,8 +29,9 @@ fn frames(desc: SceneDesc, fs: &[u32]) -> Vec<FrameScene> {
 }
 
 /// On the Cornell stage: a quad skinned to two joints (the second one animated: the
-/// quad's top edge moves), a quad with one morph target (its weight animated), and a
-/// static quad; one clip of 2 s.
+/// quad's top-left corner, vertex 3, moves), a quad with one morph target (its weight
+/// animated, the target moving vertex 3 only), and a static quad; one clip of 2 s. In
+/// both deformed quads triangle 0 (vertices 0, 1, 2) stays still and triangle 1 moves.
 fn skinned_and_morphed() -> SceneDesc {
     let quad = |x: f32| chronolux_core::scene::desc::Primitive {
         positions: vec![
@@ -43,11 +45,11 @@ fn skinned_and_morphed() -> SceneDesc {
         ..Default::default()
     };
     let mut skinned = quad(-1.5);
-    skinned.joints = Some(vec![[0, 0, 0, 0], [0, 0, 0, 0], [1, 0, 0, 0], [1, 0, 0, 0]]);
+    skinned.joints = Some(vec![[0, 0, 0, 0], [0, 0, 0, 0], [0, 0, 0, 0], [1, 0, 0, 0]]);
     skinned.joint_weights = Some(vec![Vec4::X; 4]);
     let mut morphed = quad(0.0);
     morphed.morph_targets.push(MorphTarget {
-        positions: Some(vec![Vec3::ZERO, Vec3::ZERO, Vec3::Z, Vec3::Z]),
+        positions: Some(vec![Vec3::ZERO, Vec3::ZERO, Vec3::ZERO, Vec3::Z]),
         ..Default::default()
     });
     let node = |name: &str, mesh: Option<u32>| Node {
@@ -202,12 +204,78 @@ fn skinned_and_morphed_meshes_are_deformed_not_moved() {
     assert!(FrameDelta::between(&b.build(2.0), &b.build(2.5)).is_static());
 }
 
+/// Geometry id of the node named `name`.
+fn geometry_of(scene: &FrameScene, desc: &SceneDesc, name: &str) -> u32 {
+    scene
+        .geometry
+        .iter()
+        .position(|g| desc.nodes[g.node.index()].name == name)
+        .unwrap_or_else(|| panic!("no geometry on node {name}")) as u32
+}
+
+/// A deformed mesh changes only where its vertices move: a triangle whose three vertices
+/// are bound to a still joint (or untouched by the morph target) is the same surface in
+/// both frames, the others are not; a rigidly moved object changes every triangle, a
+/// static one none. Both orders of the frames give the same answers.
+#[test]
+fn deformed_meshes_change_only_the_triangles_whose_vertices_move() {
+    let tri = |geometry, triangle| TriRef { geometry, triangle };
+    let desc = skinned_and_morphed();
+    let fr = frames(desc.clone(), &[0, 12]);
+    let d = FrameDelta::between(&fr[0], &fr[1]);
+    for name in ["skinned", "morphed"] {
+        let g = geometry_of(&fr[0], &desc, name);
+        assert!(d.geometry_changed(&fr[0], g), "{name}: the mesh deforms");
+        for (a, b) in [(&fr[0], &fr[1]), (&fr[1], &fr[0])] {
+            assert!(
+                !d.triangle_changed(a, b, tri(g, 0)),
+                "{name}: vertices 0, 1, 2 stay"
+            );
+            assert!(
+                d.triangle_changed(a, b, tri(g, 1)),
+                "{name}: vertex 3 moves"
+            );
+        }
+    }
+    let still = geometry_of(&fr[0], &desc, "still");
+    assert!(!d.triangle_changed(&fr[0], &fr[1], tri(still, 0)));
+    // Identical frames: nothing changes, deformed or not.
+    let same = FrameDelta::between(&fr[1], &fr[1]);
+    let skinned = geometry_of(&fr[0], &desc, "skinned");
+    assert!(!same.triangle_changed(&fr[1], &fr[1], tri(skinned, 1)));
+
+    let demo = stage::demo();
+    let fr = frames(demo.clone(), &[0, 12]);
+    let d = FrameDelta::between(&fr[0], &fr[1]);
+    let cube = geometry_of(&fr[0], &demo, "sliding_cube");
+    let n = fr[0].geometry[cube as usize].indices.len() as u32;
+    assert!((0..n).all(|t| d.triangle_changed(&fr[0], &fr[1], tri(cube, t))));
+    let floor = geometry_of(&fr[0], &demo, "floor");
+    assert!(!d.triangle_changed(&fr[0], &fr[1], tri(floor, 0)));
+
+    // The built-in banner: the upper half of its rows is bound to the still joint only.
+    let banner = stage::banner();
+    let fr = frames(banner.clone(), &[0, 7]);
+    let d = FrameDelta::between(&fr[0], &fr[1]);
+    let g = geometry_of(&fr[0], &banner, "banner");
+    let per_row = 2 * stage::BANNER_COLUMNS;
+    for t in 0..per_row * stage::BANNER_ROWS {
+        let row = t / per_row;
+        assert_eq!(
+            d.triangle_changed(&fr[0], &fr[1], tri(g, t)),
+            row >= stage::BANNER_ROWS / 2,
+            "banner triangle {t} (row {row})"
+        );
+    }
+}
+
 #[test]
 fn segment_dynamic_set_is_the_union_of_pairwise_changes() {
     for (what, desc) in [
         ("demo", stage::demo()),
         ("caustic", stage::caustic()),
         ("skinned and morphed", skinned_and_morphed()),
+        ("banner", stage::banner()),
     ] {
         let fs: Vec<u32> = (0..8).collect();
         let fr = frames(desc.clone(), &fs);

@@ -120,6 +120,11 @@ pub struct ReuseStats {
     /// strategies reproduced in this frame taken from there, only the rest traced here).
     #[serde(default)]
     pub retraced_from_prefix: u64,
+    /// Of `reused` and `retraced_from_prefix`: those whose first eye vertex lies on a
+    /// skinned or morphed mesh, on a triangle whose vertices did not move between the
+    /// two frames (the still part of a deforming mesh is reused as static geometry is).
+    #[serde(default)]
+    pub kept_on_deformed: u64,
     /// Mean number of frames served by each sample generated for this frame.
     pub reuse_factor: f64,
     /// Light subpaths whose splats this frame received, per pixel.

@@ -95,3 +95,31 @@ fn shared_scenes_report_deformation_and_motion() {
         assert!(FrameDelta::between(&fr[1], &again[0]).is_static(), "{name}");
     }
 }
+
+/// RiggedSimple's clip turns only its second bone: the 30 of its 188 triangles whose
+/// vertices are weighted to the root bone alone (counted from the file's JOINTS_0 and
+/// WEIGHTS_0) are the same surface in every frame, though the mesh deforms; the others
+/// change.
+#[test]
+fn rigged_simple_keeps_the_triangles_of_its_still_bone() {
+    let desc = shared("RiggedSimple.glb");
+    let fr = frames(&desc, &[0.0, 0.3]);
+    let d = FrameDelta::between(&fr[0], &fr[1]);
+    let g = fr[0]
+        .geometry
+        .iter()
+        .position(|g| desc.nodes[g.node.index()].skin.is_some())
+        .expect("a skinned geometry") as u32;
+    assert!(d.geometry_changed(&fr[0], g));
+    let n = fr[0].geometry[g as usize].indices.len() as u32;
+    let still = (0..n)
+        .filter(|&triangle| {
+            let tri = chronolux_core::accel::TriRef {
+                geometry: g,
+                triangle,
+            };
+            !d.triangle_changed(&fr[0], &fr[1], tri)
+        })
+        .count();
+    assert_eq!((still, n), (30, 188));
+}

@@ -44,6 +44,9 @@ pub(super) struct Counts {
     /// Of the re-traced: those that began with f's camera vertices through x1 at least
     /// (module doc, "Valid prefix of a camera subpath").
     pub(super) prefix: Vec<u64>,
+    /// Of the reused and the re-traced from a prefix: those whose x1 lies on a deformed
+    /// mesh (on a triangle the same in both frames: [`FrameDelta::triangle_changed`]).
+    pub(super) on_deformed: Vec<u64>,
     pub(super) invalid: Vec<u64>,
     /// Ray queries (closest-hit and shadow) of the re-traced landings' camera subpaths and
     /// connections.
@@ -58,6 +61,7 @@ impl Counts {
             partial: vec![0; n],
             retraced: vec![0; n],
             prefix: vec![0; n],
+            on_deformed: vec![0; n],
             invalid: vec![0; n],
             retrace_queries: vec![0; n],
         }
@@ -70,6 +74,7 @@ impl Counts {
             (&mut self.partial, &o.partial),
             (&mut self.retraced, &o.retraced),
             (&mut self.prefix, &o.prefix),
+            (&mut self.on_deformed, &o.on_deformed),
             (&mut self.invalid, &o.invalid),
             (&mut self.retrace_queries, &o.retrace_queries),
         ] {
@@ -838,6 +843,15 @@ impl Generation<'_> {
             let esc_dir = sc.cam_rays.first().map(|r| r.d);
             let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
             let mut around = [None, None];
+            if matches!(
+                landing,
+                Landing::Reuse(_) | Landing::Partial(_) | Landing::RetracePrefix(_)
+            ) && x1
+                .and_then(|v| v.surface.as_ref())
+                .is_some_and(|sv| self.from_f[j].instance_deformed(sv.si.instance as usize))
+            {
+                out.counts.on_deformed[j] += 1;
+            }
             let (raster_g, value, same_point) = match landing {
                 Landing::Missed => {
                     out.counts.invalid[j] += inv;
@@ -1240,6 +1254,7 @@ impl Stbpt {
             p.partial += counts.partial[j];
             p.retraced += counts.retraced[j];
             p.retraced_prefix += counts.prefix[j];
+            p.on_deformed += counts.on_deformed[j];
             p.invalid += counts.invalid[j];
             p.served_by += 1;
             if light_tracing {

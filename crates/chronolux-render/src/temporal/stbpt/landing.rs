@@ -5,8 +5,8 @@
 
 use super::generation::Generation;
 use crate::bdpt::Vertex;
-use chronolux_core::accel::Hit;
 use chronolux_core::accel::multi_frame::FrameMask;
+use chronolux_core::accel::{Hit, TriRef};
 use chronolux_core::geometry::{Ray, spawn_ray_to};
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
@@ -63,10 +63,12 @@ pub(super) struct Walk<'v> {
 }
 
 impl Generation<'_> {
-    /// The surface carrying geometry `geom` is the same in window frames `a` and `b` (its
-    /// instance neither moved nor deformed: [`FrameDelta::geometry_changed`]). Known for
-    /// f against every frame and, with motion blur, for neighbouring frames.
-    pub(super) fn same_surface(&self, a: usize, b: usize, geom: u32) -> bool {
+    /// Triangle `tri` is the same surface in window frames `a` and `b`: its instance did
+    /// not move and, on a deformed mesh, its own vertices did not
+    /// ([`FrameDelta::triangle_changed`]: the still part of a skinned or morphed mesh is
+    /// reused as static geometry is). Known for f against every frame and, with motion
+    /// blur, for neighbouring frames.
+    pub(super) fn same_surface(&self, a: usize, b: usize, tri: TriRef) -> bool {
         let d: &FrameDelta = if a == b {
             return true;
         } else if a == self.jf {
@@ -78,7 +80,7 @@ impl Generation<'_> {
         } else {
             unreachable!("frames {a} and {b} are neither f nor neighbours")
         };
-        !d.geometry_changed(&self.scenes[a], geom)
+        !d.triangle_changed(&self.scenes[a], &self.scenes[b], tri)
     }
 
     /// Where and how the sample whose camera walk in f is `walk` lands in window frame
@@ -127,7 +129,7 @@ impl Generation<'_> {
         };
         let sv = v.surface.as_ref().unwrap();
         let geom = sv.si.tri.geometry;
-        let moved = !self.same_surface(jf, j, geom);
+        let moved = !self.same_surface(jf, j, sv.si.tri);
         let (p, ng) = if moved {
             let Some((b1, b2)) = walk.x1_bary else {
                 return Landing::Missed;
@@ -252,7 +254,7 @@ impl Generation<'_> {
                 let hf = wh.frame(jf);
                 for j in bits(shared) {
                     let hj = wh.frame(j);
-                    let moved = hj.is_some_and(|h| !self.same_surface(jf, j, h.tri.geometry));
+                    let moved = hj.is_some_and(|h| !self.same_surface(jf, j, h.tri));
                     let ok = if moved {
                         self.seen_from_f(j, &ray, hj, &mut st[j])
                     } else {
@@ -323,7 +325,7 @@ impl Generation<'_> {
         };
         let geom = hit.tri.geometry;
         let si_g = scene_g.surface_at(hit.tri, hit.instance, hit.b1, hit.b2, Some(ray.at(hit.t)));
-        let (p, ng) = if self.same_surface(self.jf, j, geom) {
+        let (p, ng) = if self.same_surface(self.jf, j, hit.tri) {
             (si_g.p, si_g.ng)
         } else {
             let inst = scene_f.geometry_instance[geom as usize];

@@ -33,8 +33,9 @@
 //! continuation `wi`: `R = c ⊘ f(wo_f, wi)`, i.e. the incident radiance estimate times
 //! |cos|/pdf and its MIS weight). x1's own emission (s = 0, t = 2) is kept as its MIS
 //! weight, the emitted radiance being re-evaluated towards the new view. Directions are
-//! kept in world space: reuse happens only while x1's object does not move, when x1's
-//! shading frame is the same in f and g, so world and local directions are equivalent.
+//! kept in world space: reuse happens only while x1's surface does not move (its object,
+//! or on a deforming mesh its triangle), when x1's shading frame is the same in f and g,
+//! so world and local directions are equivalent.
 //!
 //! # Reuse in frame g
 //!
@@ -44,9 +45,13 @@
 //!    camera ray escaped land where their direction projects in g. A sample that does not
 //!    land does not serve g's camera part (it still serves g's light tracing, below).
 //! 2. **Reuse** (the view-dependent part only) when everything the split depends on is
-//!    reproduced in g: x1's instance has the same placement and data in f and g (as
-//!    every scene comparison here: from the exact [`FrameDelta`]s of f and the window
-//!    frames), the sample continued from x1 by a non-delta lobe, x1 is not near-specular
+//!    reproduced in g: x1's surface is the same in f and g (as every scene comparison
+//!    here: from the exact [`FrameDelta`]s of f and the window frames) — its instance has
+//!    the same placement and, on a skinned or morphed mesh, x1's own triangle has the
+//!    same vertex data in both frames ([`FrameDelta::triangle_changed`]: the still part of
+//!    a deforming mesh, e.g. the vertices bound to joints that do not move, is reused as
+//!    static geometry is, and the mesh's moving part is answered per frame by the
+//!    multi-frame structure like any dynamic geometry) — the sample continued from x1 by a non-delta lobe, x1 is not near-specular
 //!    ([`Bsdf::near_specular`]: GGX α < 0.1) while the camera moved (the continuation,
 //!    sampled for f's view, would not cover g's lobe), materials and lights are the same,
 //!    and every segment the subpaths sampled beyond x1 — camera segments after x1, all
@@ -513,6 +518,7 @@ struct Pending {
     partial: u64,
     retraced: u64,
     retraced_prefix: u64,
+    on_deformed: u64,
     invalid: u64,
     /// Generated frames whose samples served this frame.
     served_by: u32,
@@ -823,6 +829,7 @@ impl SequenceRenderer for Stbpt {
             reused_partially: p.partial,
             retraced: p.retraced,
             retraced_from_prefix: p.retraced_prefix,
+            kept_on_deformed: p.on_deformed,
             reuse_factor: self.served.get(&frame).copied().unwrap_or(0.0),
             light_subpaths_per_pixel: spp as f64 * p.served_by_light,
             filled: filled.pixels.len() as u64,

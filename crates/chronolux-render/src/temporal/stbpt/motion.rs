@@ -42,7 +42,7 @@ impl Generation<'_> {
                 Some(v) => {
                     let sv = v.surface.as_ref()?;
                     let geom = sv.si.tri.geometry;
-                    let p = if self.same_surface(src, jn, geom) {
+                    let p = if self.same_surface(src, jn, sv.si.tri) {
                         v.p
                     } else {
                         let (b1, b2) = bary?;

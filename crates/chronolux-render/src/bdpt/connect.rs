@@ -260,6 +260,59 @@ pub fn mis_weight(
     1.0 / (1.0 + sum)
 }
 
+/// The MIS heuristic applied to a density ratio.
+fn heuristic(settings: &BdptSettings, r: f32) -> f32 {
+    match settings.mis {
+        MisHeuristic::Balance => r,
+        MisHeuristic::Power => r * r,
+    }
+}
+
+/// Strategy (s, t ≥ 2)'s MIS weight split around light tracing: the sum of h(p_{s′} / p_s)
+/// over the path's strategies other than light tracing (itself included, 1), and light
+/// tracing's ratio p_{t′=1} / p_s when the path has that strategy; the weight is
+/// 1 / (sum + h(ratio)). Light tracing's ratio is the only one in which x1's density from
+/// the camera appears (as a factor 1 / p_cam(x1): every other strategy samples x1 from the
+/// camera too), so a technique that weighs the camera strategies of a path sampled with
+/// one camera against the light tracing of another camera re-weights with
+/// [`camera_reweight`]. `None`: no light tracing in `settings`, or t < 2.
+#[allow(clippy::too_many_arguments)] // reason: mis_weight's arguments
+pub fn light_tracing_split(
+    scene: &FrameScene,
+    settings: &BdptSettings,
+    light: &[Vertex],
+    camera: &[Vertex],
+    sampled: Option<&Vertex>,
+    s: usize,
+    t: usize,
+) -> Option<(f32, Option<f32>)> {
+    if t < 2 || !settings.light_tracing {
+        return None;
+    }
+    let (mut rest, mut lt) = (1.0f32, None);
+    if s + t > 2 {
+        other_strategies(scene, settings, light, camera, sampled, s, t, |s2, r| {
+            if s2 == s + t - 1 {
+                lt = Some(r);
+            } else {
+                rest += heuristic(settings, r);
+            }
+        });
+    }
+    Some((rest, lt))
+}
+
+/// The factor that turns the MIS weight of a strategy t ≥ 2 computed with x1's density
+/// p from one camera into the weight with density p′ from another (`rho` = p / p′), from
+/// its [`light_tracing_split`]: light tracing's ratio scales by `rho`, the others do not.
+pub fn camera_reweight(settings: &BdptSettings, split: (f32, Option<f32>), rho: f32) -> f32 {
+    let (rest, Some(r)) = split else {
+        return 1.0;
+    };
+    let k = (rest + heuristic(settings, r)) / (rest + heuristic(settings, r * rho));
+    if k.is_finite() { k } else { 0.0 }
+}
+
 /// The strategies able to produce the path built by strategy (s, t), as (s′, p_{s′} / p_s):
 /// each strategy's density for this path relative to (s, t)'s own (pbrt-v4's ratio trick,
 /// as in [`mis_weight`], with the same rules for delta vertices, delta lights and light

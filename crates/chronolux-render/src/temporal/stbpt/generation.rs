@@ -11,8 +11,8 @@ use super::strategies::{self, Mode, Pilot, SHADOW_QUERY_COST, luminance, pilot_p
 use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH, adapt};
 use crate::bdpt::{
     BdptSettings, Connection, MisHeuristic, Vertex, VertexKind, connect_with,
-    generate_camera_subpath, generate_camera_subpath_with, generate_light_subpath_with, mis_weight,
-    strategy_ratios,
+    generate_camera_subpath, generate_camera_subpath_with, generate_light_subpath_with,
+    light_tracing_split, mis_weight, strategy_ratios,
 };
 use crate::integrator::{TILE, tile_rect};
 use crate::temporal::window_film::Contribution;
@@ -202,6 +202,11 @@ pub(super) struct Entry {
     pub(super) continuation: bool,
     /// Window frames in which the entry's shadow ray is unoccluded.
     pub(super) vis: FrameMask,
+    /// Its MIS weight split around light tracing ([`light_tracing_split`]), kept when
+    /// light tracing is on and a window frame has another camera: a frame g whose camera
+    /// sees x1 with another density re-weights the entry with it (module doc, "MIS
+    /// weights in another frame").
+    pub(super) split: Option<(f32, Option<f32>)>,
 }
 
 /// Per-thread scratch buffers.
@@ -504,6 +509,8 @@ impl Generation<'_> {
         let mut sampler = ns.clone();
         let jf = self.jf;
         let mut ratios = Vec::new();
+        // Some window frame has another camera: the entries keep their weights' split.
+        let split_weights = self.bdpt.light_tracing && self.same_camera != all;
         for t in 2..=cam.len() {
             for s in 0..=self.bdpt.max_light_vertices(light.len()) {
                 if s + t - 1 > max_segments {
@@ -593,6 +600,19 @@ impl Generation<'_> {
                     if fv.y != 0.0 { l.y / fv.y } else { 0.0 },
                     if fv.z != 0.0 { l.z / fv.z } else { 0.0 },
                 );
+                let split = split_weights
+                    .then(|| {
+                        light_tracing_split(
+                            scene_f,
+                            self.bdpt,
+                            light,
+                            cam,
+                            c.sampled.as_ref(),
+                            s,
+                            t,
+                        )
+                    })
+                    .flatten();
                 entries.push(Entry {
                     s,
                     t,
@@ -601,6 +621,7 @@ impl Generation<'_> {
                     c: l,
                     continuation: t >= 3,
                     vis,
+                    split,
                 });
             }
         }
@@ -1080,10 +1101,10 @@ impl Stbpt {
             }
         }
         self.open_films(scenes[jf].camera.width, scenes[jf].camera.height);
-        // A moving camera turns light tracing off for the whole sequence (module doc,
-        // "Bias"): the weights of the kept strategies then sum to one in every frame. The
-        // path strategies have none.
-        let light_tracing = self.settings.bdpt.light_tracing && !source.builder().camera_may_move();
+        // Under a moving camera the entries reused in a frame with another camera are
+        // re-weighted for it (module doc, "MIS weights in another frame"). The path
+        // strategies have no light tracing.
+        let light_tracing = self.settings.bdpt.light_tracing;
         let bdpt = BdptSettings {
             light_tracing,
             path_strategies: false,

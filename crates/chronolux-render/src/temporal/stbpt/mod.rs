@@ -159,21 +159,26 @@
 //! the landings dropped, on pixels at silhouettes and on the image border where the
 //! camera trucks or dollies, which are served by fewer frames (noisier, not darker).
 //!
-//! MIS weights are those computed in f. They are the weights of the densities the sample
-//! was drawn with (f's camera sampled x1, f's view sampled the continuation), and the
-//! strategies t ≥ 2 and t = 1 partition each path's contribution exactly when g's camera
-//! samples x1 with f's density, i.e. whenever the camera does not move between f and g.
-//! With a moving camera the t = 1 weights (computed with g's camera) and the kept t ≥ 2
-//! weights (f's camera) would not sum to one: measured on the built-in `dolly` scene at 3
-//! fps, a 6 % excess on the red wall (block t = 8.8 in `tests/it/stbpt.rs`). So when the
-//! camera may move anywhere in the clip ([`FrameBuilder::camera_may_move`], from the
-//! animation) the sequence is rendered **without the light-tracing strategies**
-//! ([`BdptSettings::light_tracing`]): all remaining strategies sample x1 from the camera,
-//! so the camera's density cancels from their weights' ratios, and the weights computed
-//! in f sum to one for the path in any frame g. The price is light tracing's efficiency on
-//! caustics seen directly.
-//!
-//! [`FrameBuilder::camera_may_move`]: chronolux_core::scene::frame::FrameBuilder::camera_may_move
+//! **MIS weights in another frame.** The weights of a reused sample are those computed
+//! in f, except for one density. They are the weights of the densities the sample was
+//! drawn with (f's camera sampled x1, f's view sampled the continuation), and g's
+//! light-tracing splats (t = 1) are weighted with g's camera. The strategies t ≥ 2 and
+//! t = 1 partition each path's contribution in g when the t ≥ 2 weights use g's camera
+//! density of x1 too: the landed samples stand for g's camera samples in g's pixel (the
+//! pixel mean over them, above). x1's density from the camera, p_cam(x1), appears in one
+//! ratio only, light tracing's p_{t=1} / p_{s,t} (as 1 / p_cam(x1): every other strategy
+//! samples x1 from the camera too), so each entry keeps its weight split around that
+//! ratio ([`crate::bdpt::light_tracing_split`]) and g multiplies the entry by
+//! [`crate::bdpt::camera_reweight`] with ρ = p_cam,f(x1) / p_cam,g(x1); the strategies
+//! recomputed for partial reuse likewise. The other densities at x1 depend on the view
+//! direction unless x1 is Lambertian ([`Bsdf::is_lambertian`]), so when the camera moved a
+//! sample is reused only at a Lambertian x1 and re-traced in g otherwise (its weights are
+//! then g's own). Checked: without the re-weighting the moving-camera tests fail, +4 % on
+//! the dolly's red wall (t = 6.3). Measured on the dolly, 64², 4 spp, frames 8–15:
+//! relMSE 0.0256 → 0.0065 (light tracing had been off under a moving camera, which left
+//! the metal sphere's reflection of the lamp on the ceiling to camera paths, as
+//! fireflies), for 38 % more CPU (BENCHMARKS.md, "stbpt under a moving camera: light
+//! tracing").
 //!
 //! # Motion blur (`shutter` > 0)
 //!
@@ -211,8 +216,8 @@
 //! film writes). A re-traced landing is a fresh sample at a fresh sample's price and
 //! counts neither way. K is the largest distance such that every distance up to it paid.
 //! When distance 1 does not pay, K = 0: the samples serve only their own frame, i.e. the
-//! effort is spent as frame-by-frame `bdpt` spends it (without light tracing when the
-//! camera moves, see "Bias"), or as `path` spends it when the frame uses the path
+//! effort is spent as frame-by-frame `bdpt` spends it, or as `path` spends it when the
+//! frame uses the path
 //! strategies (next section). With motion blur K ≥ 1 (the trajectories need the
 //! neighbouring frames). The decision and its statistics are reported per frame
 //! (`reuse_decision` in `run.json`). A frame's splats are scaled by the number of

@@ -5,7 +5,9 @@
 //! ([`camera_strategies`](Generation::camera_strategies)) when the sample is re-traced.
 
 use super::generation::{Entry, Generation};
-use crate::bdpt::{Vertex, connect, skip_connect};
+use crate::bdpt::{
+    Vertex, camera_reweight, connect, connect_with, light_tracing_split, skip_connect,
+};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::Ray;
@@ -69,6 +71,13 @@ impl Generation<'_> {
         // direction is f's and the entries' values computed in f are g's: no BSDF
         // re-evaluation.
         let same_view = eye == self.scenes[self.jf].camera.position();
+        // With light tracing, g's camera sees x1 with its own density: each entry's weight
+        // is re-weighted for it (module doc, "MIS weights in another frame").
+        let rho = self.camera_density_ratio(j, v);
+        let reweight = |e: &Entry| {
+            e.split
+                .map_or(1.0, |sp| camera_reweight(self.bdpt, sp, rho))
+        };
         let kept_entries = entries
             .iter()
             .filter(|e| e.vis >> j & 1 == 1 && e.s <= kept);
@@ -76,7 +85,7 @@ impl Generation<'_> {
         if same_view {
             l = emission.map_or(Rgb::ZERO, |(c, _)| c);
             for e in kept_entries {
-                l += e.c;
+                l += e.c * reweight(e);
             }
         } else {
             l = emission.map_or(Rgb::ZERO, |(_, wm)| scene_g.emitted(&sv.si, wo_g) * wm);
@@ -85,9 +94,9 @@ impl Generation<'_> {
             for e in kept_entries {
                 if e.continuation {
                     let c = continuation.get_or_insert((e.wi, Rgb::ZERO));
-                    c.1 += e.r;
+                    c.1 += e.r * reweight(e);
                 } else {
-                    l += sv.bsdf.f(wo_g, e.wi, TransportMode::Radiance) * e.r;
+                    l += sv.bsdf.f(wo_g, e.wi, TransportMode::Radiance) * e.r * reweight(e);
                 }
             }
             if let Some((wi, r)) = continuation {
@@ -109,10 +118,33 @@ impl Generation<'_> {
                     if s + t - 1 > max_segments {
                         continue;
                     }
-                    let Some(c) = connect(scene_g, self.bdpt, light_g, cam, s, t, &mut sampler, st)
-                    else {
+                    let Some(conn) = connect_with(
+                        scene_g,
+                        self.bdpt,
+                        light_g,
+                        cam,
+                        s,
+                        t,
+                        &mut sampler,
+                        st,
+                        &mut |r| !scene_g.occluded(r),
+                    ) else {
                         continue;
                     };
+                    let mut c = conn.contribution;
+                    if rho != 1.0
+                        && let Some(sp) = light_tracing_split(
+                            scene_g,
+                            self.bdpt,
+                            light_g,
+                            cam,
+                            conn.sampled.as_ref(),
+                            s,
+                            t,
+                        )
+                    {
+                        c.l *= camera_reweight(self.bdpt, sp, rho);
+                    }
                     if same_view {
                         l += c.l;
                         continue;
@@ -145,6 +177,32 @@ impl Generation<'_> {
             }
         }
         l
+    }
+
+    /// p_f / p_g: the density with which f's camera sampled x1 (`v`, a camera vertex of
+    /// f), over the density with which window frame `j`'s camera would sample it (both
+    /// per unit area at x1). 1 when light tracing is off (no weight depends on it) or the
+    /// cameras are the same.
+    fn camera_density_ratio(&self, j: usize, v: &Vertex) -> f32 {
+        if !self.bdpt.light_tracing || self.same_camera >> j & 1 == 1 {
+            return 1.0;
+        }
+        let scene_g = &self.scenes[j];
+        let eye = Vertex::camera(scene_g.camera.position(), Rgb::ONE, false);
+        let p_g = eye.pdf(scene_g, None, v);
+        #[cfg(debug_assertions)]
+        {
+            // x1's stored density is f's camera's, as computed here for g's.
+            let scene_f = &self.scenes[self.jf];
+            let eye_f = Vertex::camera(scene_f.camera.position(), Rgb::ONE, false);
+            let p_f = eye_f.pdf(scene_f, None, v);
+            debug_assert!(
+                (p_f - v.pdf_fwd).abs() <= 1e-4 * p_f.abs().max(v.pdf_fwd.abs()),
+                "x1's density from f's camera {p_f} is not its stored {}",
+                v.pdf_fwd
+            );
+        }
+        if p_g > 0.0 { v.pdf_fwd / p_g } else { 1.0 }
     }
 
     /// Sum of the t ≥ 2 strategies of `camera` and `light` in frame `j` (plain BDPT).

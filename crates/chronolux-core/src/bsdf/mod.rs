@@ -383,14 +383,6 @@ impl Bsdf {
             && lo.alpha < NEAR_SPECULAR_ALPHA
     }
 
-    /// Only the Lambertian lobe: the value and the sampling density of a direction do not
-    /// depend on the view direction `wo` (on the side `wo` lies), so densities computed for
-    /// one view hold for any other from the same side.
-    pub fn is_lambertian(&self) -> bool {
-        let lo = &self.lobes;
-        lo.specular_weight == 0.0 && lo.metal_weight == 0.0 && lo.transmission_weight == 0.0
-    }
-
     /// True if some lobe is not a delta distribution (light sampling can help).
     pub fn has_non_delta(&self) -> bool {
         let l = &self.lobes;

@@ -268,16 +268,51 @@ fn heuristic(settings: &BdptSettings, r: f32) -> f32 {
     }
 }
 
-/// Strategy (s, t ≥ 2)'s MIS weight split around light tracing: the sum of h(p_{s′} / p_s)
-/// over the path's strategies other than light tracing (itself included, 1), and light
-/// tracing's ratio p_{t′=1} / p_s when the path has that strategy; the weight is
-/// 1 / (sum + h(ratio)). Light tracing's ratio is the only one in which x1's density from
-/// the camera appears (as a factor 1 / p_cam(x1): every other strategy samples x1 from the
-/// camera too), so a technique that weighs the camera strategies of a path sampled with
-/// one camera against the light tracing of another camera re-weights with
-/// [`camera_reweight`]. `None`: no light tracing in `settings`, or t < 2.
+/// Strategy (s, t ≥ 2)'s MIS weight, 1 / Σ h(p_{s′} / p_s) over the path's strategies,
+/// split by how each ratio depends on x0 (the camera) and on the view direction at x1, so
+/// that the weight of the same path seen by another camera (same x1 and subpaths) follows
+/// from three densities ([`ViewSplit::reweight`]). Of the densities in the ratios only
+/// three involve x0: x1's density from the camera p_cam(x1) (a factor 1 / p_cam in light
+/// tracing's ratio, t′ = 1: every other strategy samples x1 from the camera too), and the
+/// densities at x1 that depend on the direction to x0: for t ≥ 3 the continuation's
+/// p(x1 → x2) (a factor 1 / p in the ratios of t′ = 1 and t′ = 2), for t = 2 the reverse
+/// density at the light vertex connected to, p(x0, x1 → y) (a factor p in every ratio of
+/// the light side). `None`: t < 2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewSplit {
+    /// h of the ratios that do not depend on x0, plus 1 (the strategy itself).
+    pub rest: f32,
+    /// h(ratio) of light tracing (t′ = 1), 0 when the path has none (light tracing off).
+    pub lt: f32,
+    /// t ≥ 3: h(ratio) of t′ = 2.
+    pub cam2: f32,
+    /// t = 2: Σ h(ratio) over the light side's strategies.
+    pub light: f32,
+    /// The heuristic's exponent β (h(k r) = k^β h(r)).
+    pub beta: i32,
+}
+
+impl ViewSplit {
+    /// The factor turning the weight computed with x0 into the weight with another camera
+    /// x0′: `rho` = p_cam(x1) / p′_cam(x1), `cont` = p(x1 → x2 | x0) / p(x1 → x2 | x0′)
+    /// (t ≥ 3), `light` = p(x0′, x1 → y) / p(x0, x1 → y) (t = 2). A factor that is not
+    /// finite and positive (a zero density) leaves that term as it was.
+    pub fn reweight(&self, rho: f32, cont: f32, light: f32) -> f32 {
+        let k = |x: f32| {
+            let x = if x.is_finite() && x > 0.0 { x } else { 1.0 };
+            if self.beta == 2 { x * x } else { x }
+        };
+        let before = self.rest + self.lt + self.cam2 + self.light;
+        let after =
+            self.rest + k(rho) * k(cont) * self.lt + k(cont) * self.cam2 + k(light) * self.light;
+        let w = before / after;
+        if w.is_finite() { w } else { 1.0 }
+    }
+}
+
+/// [`ViewSplit`] of strategy (s, t) of these subpaths (`mis_weight`'s arguments).
 #[allow(clippy::too_many_arguments)] // reason: mis_weight's arguments
-pub fn light_tracing_split(
+pub fn view_split(
     scene: &FrameScene,
     settings: &BdptSettings,
     light: &[Vertex],
@@ -285,32 +320,36 @@ pub fn light_tracing_split(
     sampled: Option<&Vertex>,
     s: usize,
     t: usize,
-) -> Option<(f32, Option<f32>)> {
-    if t < 2 || !settings.light_tracing {
+) -> Option<ViewSplit> {
+    if t < 2 {
         return None;
     }
-    let (mut rest, mut lt) = (1.0f32, None);
+    let beta = match settings.mis {
+        MisHeuristic::Balance => 1,
+        MisHeuristic::Power => 2,
+    };
+    let mut v = ViewSplit {
+        rest: 1.0,
+        lt: 0.0,
+        cam2: 0.0,
+        light: 0.0,
+        beta,
+    };
     if s + t > 2 {
         other_strategies(scene, settings, light, camera, sampled, s, t, |s2, r| {
-            if s2 == s + t - 1 {
-                lt = Some(r);
+            let h = heuristic(settings, r);
+            if s2 + 1 == s + t {
+                v.lt += h;
+            } else if t >= 3 && s2 + 2 == s + t {
+                v.cam2 += h;
+            } else if t == 2 && s2 < s {
+                v.light += h;
             } else {
-                rest += heuristic(settings, r);
+                v.rest += h;
             }
         });
     }
-    Some((rest, lt))
-}
-
-/// The factor that turns the MIS weight of a strategy t ≥ 2 computed with x1's density
-/// p from one camera into the weight with density p′ from another (`rho` = p / p′), from
-/// its [`light_tracing_split`]: light tracing's ratio scales by `rho`, the others do not.
-pub fn camera_reweight(settings: &BdptSettings, split: (f32, Option<f32>), rho: f32) -> f32 {
-    let (rest, Some(r)) = split else {
-        return 1.0;
-    };
-    let k = (rest + heuristic(settings, r)) / (rest + heuristic(settings, r * rho));
-    if k.is_finite() { k } else { 0.0 }
+    Some(v)
 }
 
 /// The strategies able to produce the path built by strategy (s, t), as (s′, p_{s′} / p_s):

@@ -58,8 +58,8 @@ use chronolux_core::scene::desc::Projection;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
 pub use connect::{
-    Connection, Contribution, camera_reweight, connect, connect_with, light_tracing_split,
-    mis_weight, skip_connect, strategy_ratios,
+    Connection, Contribution, ViewSplit, connect, connect_with, mis_weight, skip_connect,
+    strategy_ratios, view_split,
 };
 pub use vertex::{Vertex, VertexKind};
 

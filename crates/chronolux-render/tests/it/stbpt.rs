@@ -624,10 +624,10 @@ fn stbpt_chooses_the_path_strategies_where_bdpt_loses() {
 /// which g's camera sees x1 (module doc, "MIS weights in another frame"). Checked: without
 /// that re-weighting this test fails, block (0, 1) at t = 6.3 (+4 % on the red wall; the
 /// frame-agreement test's moving camera at t = 5.5). The second scene stops the dolly's
-/// glossy cube, so that samples on a static glossy surface (whose densities depend on the
-/// view) meet the moving camera: they are re-traced in g, not reused. (Checked: reusing
-/// them with the densities of f's view passes here too; that bias is below the test's
-/// power, and the rule stays because only it makes the weights sum to one exactly.)
+/// glossy cube, so that samples on a static glossy surface, whose densities depend on the
+/// view, are reused under the moving camera. (Checked: leaving out the view's density
+/// ratios passes here too, below this test's power; the exact check of the weights,
+/// `view_split_reweights_a_path_for_another_camera_exactly` in `bdpt.rs`, fails then.)
 #[test]
 fn stbpt_agrees_with_bdpt_under_a_moving_camera() {
     let (k, spp, runs, fps) = (2u32, 2u32, 12u64, 3.0f32);

@@ -10,9 +10,9 @@ use super::reuse::{Regenerated, Reproduced};
 use super::strategies::{self, Mode, Pilot, SHADOW_QUERY_COST, luminance, pilot_pixel};
 use super::{CONNECTION_STREAM, LIGHT_STREAM, Stbpt, TILES_PER_BATCH, adapt};
 use crate::bdpt::{
-    BdptSettings, Connection, MisHeuristic, Vertex, VertexKind, connect_with,
-    generate_camera_subpath, generate_camera_subpath_with, generate_light_subpath_with,
-    light_tracing_split, mis_weight, strategy_ratios,
+    BdptSettings, Connection, MisHeuristic, Vertex, VertexKind, ViewSplit, connect_with,
+    generate_camera_subpath, generate_camera_subpath_with, generate_light_subpath_with, mis_weight,
+    strategy_ratios, view_split,
 };
 use crate::integrator::{TILE, tile_rect};
 use crate::temporal::window_film::Contribution;
@@ -202,11 +202,13 @@ pub(super) struct Entry {
     pub(super) continuation: bool,
     /// Window frames in which the entry's shadow ray is unoccluded.
     pub(super) vis: FrameMask,
-    /// Its MIS weight split around light tracing ([`light_tracing_split`]), kept when
-    /// light tracing is on and a window frame has another camera: a frame g whose camera
-    /// sees x1 with another density re-weights the entry with it (module doc, "MIS
-    /// weights in another frame").
-    pub(super) split: Option<(f32, Option<f32>)>,
+    /// Its MIS weight split by what depends on the camera ([`view_split`]), kept when
+    /// light tracing is on and a window frame has another camera: a frame g with another
+    /// camera re-weights the entry for it (module doc, "MIS weights in another frame").
+    pub(super) split: Option<ViewSplit>,
+    /// With `split`: x1's BSDF density of `wi` for f's view (the view-dependent density
+    /// the split's terms scale with, computed once here instead of in every frame).
+    pub(super) pdf_f: f32,
 }
 
 /// Per-thread scratch buffers.
@@ -601,18 +603,13 @@ impl Generation<'_> {
                     if fv.z != 0.0 { l.z / fv.z } else { 0.0 },
                 );
                 let split = split_weights
-                    .then(|| {
-                        light_tracing_split(
-                            scene_f,
-                            self.bdpt,
-                            light,
-                            cam,
-                            c.sampled.as_ref(),
-                            s,
-                            t,
-                        )
-                    })
+                    .then(|| view_split(scene_f, self.bdpt, light, cam, c.sampled.as_ref(), s, t))
                     .flatten();
+                let pdf_f = if split.is_some() {
+                    sv.bsdf.pdf(sv.wo, wi)
+                } else {
+                    0.0
+                };
                 entries.push(Entry {
                     s,
                     t,
@@ -622,6 +619,7 @@ impl Generation<'_> {
                     continuation: t >= 3,
                     vis,
                     split,
+                    pdf_f,
                 });
             }
         }

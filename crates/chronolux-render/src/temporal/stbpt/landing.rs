@@ -165,10 +165,8 @@ impl Generation<'_> {
         let camera_moved = eye != eye_f;
         let valid = walk.cam_valid >> j & 1 == 1;
         // The continuation at x1 was sampled for f's view: not reused for another view at
-        // a near-specular surface; with light tracing, only where x1's densities do not
-        // depend on the view (module doc, "MIS weights in another frame").
-        let view_safe = !(camera_moved
-            && (sv.bsdf.near_specular() || (self.bdpt.light_tracing && !sv.bsdf.is_lambertian())));
+        // a near-specular surface.
+        let view_safe = !(sv.bsdf.near_specular() && camera_moved);
         let split_ok = view_safe && !moved && !v.delta;
         if valid && split_ok {
             Landing::Reuse(r)

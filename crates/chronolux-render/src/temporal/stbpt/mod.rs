@@ -159,26 +159,29 @@
 //! the landings dropped, on pixels at silhouettes and on the image border where the
 //! camera trucks or dollies, which are served by fewer frames (noisier, not darker).
 //!
-//! **MIS weights in another frame.** The weights of a reused sample are those computed
-//! in f, except for one density. They are the weights of the densities the sample was
-//! drawn with (f's camera sampled x1, f's view sampled the continuation), and g's
-//! light-tracing splats (t = 1) are weighted with g's camera. The strategies t ≥ 2 and
-//! t = 1 partition each path's contribution in g when the t ≥ 2 weights use g's camera
-//! density of x1 too: the landed samples stand for g's camera samples in g's pixel (the
-//! pixel mean over them, above). x1's density from the camera, p_cam(x1), appears in one
-//! ratio only, light tracing's p_{t=1} / p_{s,t} (as 1 / p_cam(x1): every other strategy
-//! samples x1 from the camera too), so each entry keeps its weight split around that
-//! ratio ([`crate::bdpt::light_tracing_split`]) and g multiplies the entry by
-//! [`crate::bdpt::camera_reweight`] with ρ = p_cam,f(x1) / p_cam,g(x1); the strategies
-//! recomputed for partial reuse likewise. The other densities at x1 depend on the view
-//! direction unless x1 is Lambertian ([`Bsdf::is_lambertian`]), so when the camera moved a
-//! sample is reused only at a Lambertian x1 and re-traced in g otherwise (its weights are
-//! then g's own). Checked: without the re-weighting the moving-camera tests fail, +4 % on
-//! the dolly's red wall (t = 6.3). Measured on the dolly, 64², 4 spp, frames 8–15:
-//! relMSE 0.0256 → 0.0065 (light tracing had been off under a moving camera, which left
-//! the metal sphere's reflection of the lamp on the ceiling to camera paths, as
-//! fireflies), for 38 % more CPU (BENCHMARKS.md, "stbpt under a moving camera: light
-//! tracing").
+//! **MIS weights in another frame.** The weights of a reused sample are computed in f
+//! for f's camera, and g's light-tracing splats (t = 1) are weighted for g's camera.
+//! The strategies t ≥ 2 and t = 1 partition each path's contribution in g when the
+//! t ≥ 2 weights are g's too: the weights BDPT would give the same path seen from g's
+//! camera (any partition of unity keeps each landing unbiased; the landed samples stand
+//! for g's camera samples in g's pixel, as the pixel mean over them does above). Only
+//! three densities in a weight's ratios involve the camera x0
+//! ([`crate::bdpt::ViewSplit`]): x1's density from the camera p_cam(x1) (in light
+//! tracing's ratio only, t′ = 1: every other strategy samples x1 from the camera too),
+//! and the densities at x1 that depend on the direction to x0: for t ≥ 3 the
+//! continuation's p(x1 → x2), for t = 2 the reverse density towards the light vertex
+//! connected to. So each entry keeps its weight split by those terms
+//! ([`crate::bdpt::view_split`]) and g rescales them with the ratios of the three
+//! densities, p_cam,f(x1) / p_cam,g(x1) and one BSDF density ratio
+//! ([`crate::bdpt::ViewSplit::reweight`]); the strategies recomputed for partial reuse
+//! likewise. `tests/it/bdpt.rs` checks that this equals the weight computed from scratch
+//! with g's camera vertex, for every strategy of a thousand paths on the dolly, and fails
+//! without either view factor. Without the re-weighting the moving-camera tests fail,
+//! +4 % on the dolly's red wall (t = 6.3). Before, a moving camera turned light tracing
+//! off for the sequence, which left the metal sphere's reflection of the lamp on the
+//! dolly's ceiling to camera paths, as fireflies: relMSE at 4 spp, frames 8–15, 0.0256 →
+//! 0.0065 with it, for 38 % more CPU (BENCHMARKS.md, "stbpt under a moving camera: light
+//! tracing kept").
 //!
 //! # Motion blur (`shutter` > 0)
 //!

@@ -5,9 +5,7 @@
 //! ([`camera_strategies`](Generation::camera_strategies)) when the sample is re-traced.
 
 use super::generation::{Entry, Generation};
-use crate::bdpt::{
-    Vertex, camera_reweight, connect, connect_with, light_tracing_split, skip_connect,
-};
+use crate::bdpt::{Vertex, ViewSplit, connect, connect_with, skip_connect, view_split};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::Ray;
@@ -71,12 +69,37 @@ impl Generation<'_> {
         // direction is f's and the entries' values computed in f are g's: no BSDF
         // re-evaluation.
         let same_view = eye == self.scenes[self.jf].camera.position();
-        // With light tracing, g's camera sees x1 with its own density: each entry's weight
-        // is re-weighted for it (module doc, "MIS weights in another frame").
+        // With light tracing, each entry is re-weighted for g's camera: x1's density from
+        // it, and the densities at x1 that depend on the view (module doc, "MIS weights in
+        // another frame").
         let rho = self.camera_density_ratio(j, v);
+        // x1's BSDF density of `wi` for g's view over f's (`pf`), 1 for f's view.
+        let view_ratio = |wi: Vec3, pf: f32| -> f32 {
+            if same_view {
+                1.0
+            } else {
+                sv.bsdf.pdf(wo_g, wi) / pf
+            }
+        };
+        // t ≥ 3: the continuation's density, f's over g's (one direction shared by all
+        // those entries: one evaluation); t = 2: the reverse density at x1 towards the
+        // light vertex, g's over f's (only where the light side has strategies).
+        let cont = entries
+            .iter()
+            .find(|e| e.continuation && e.split.is_some())
+            .map_or(1.0, |e| 1.0 / view_ratio(e.wi, e.pdf_f));
+        let reweigh = |sp: ViewSplit, t: usize, wi: Vec3, pf: f32, cont: f32| {
+            if t >= 3 {
+                sp.reweight(rho, cont, 1.0)
+            } else if sp.light > 0.0 {
+                sp.reweight(rho, 1.0, view_ratio(wi, pf))
+            } else {
+                sp.reweight(rho, 1.0, 1.0)
+            }
+        };
         let reweight = |e: &Entry| {
             e.split
-                .map_or(1.0, |sp| camera_reweight(self.bdpt, sp, rho))
+                .map_or(1.0, |sp| reweigh(sp, e.t, e.wi, e.pdf_f, cont))
         };
         let kept_entries = entries
             .iter()
@@ -132,8 +155,14 @@ impl Generation<'_> {
                         continue;
                     };
                     let mut c = conn.contribution;
-                    if rho != 1.0
-                        && let Some(sp) = light_tracing_split(
+                    let wi = if t == 2 {
+                        (light_g[s - 1].p - v.p).normalize_or_zero()
+                    } else {
+                        cam_rays[1].d.normalize()
+                    };
+                    if self.bdpt.light_tracing
+                        && self.same_camera >> j & 1 == 0
+                        && let Some(sp) = view_split(
                             scene_g,
                             self.bdpt,
                             light_g,
@@ -143,17 +172,15 @@ impl Generation<'_> {
                             t,
                         )
                     {
-                        c.l *= camera_reweight(self.bdpt, sp, rho);
+                        c.l *= {
+                            let pf = sv.bsdf.pdf(sv.wo, wi);
+                            reweigh(sp, t, wi, pf, 1.0 / view_ratio(wi, pf))
+                        };
                     }
                     if same_view {
                         l += c.l;
                         continue;
                     }
-                    let wi = if t == 2 {
-                        (light_g[s - 1].p - v.p).normalize_or_zero()
-                    } else {
-                        cam_rays[1].d.normalize()
-                    };
                     let fv = sv.bsdf.f(sv.wo, wi, TransportMode::Radiance);
                     let fg = sv.bsdf.f(wo_g, wi, TransportMode::Radiance);
                     l += Rgb::new(

@@ -249,13 +249,9 @@ pub fn mis_weight(
     if s + t == 2 {
         return 1.0;
     }
-    let h = |r: f32| match settings.mis {
-        MisHeuristic::Balance => r,
-        MisHeuristic::Power => r * r,
-    };
     let mut sum = 0.0f32;
     other_strategies(scene, settings, light, camera, sampled, s, t, |_, r| {
-        sum += h(r)
+        sum += heuristic(settings, r)
     });
     1.0 / (1.0 + sum)
 }

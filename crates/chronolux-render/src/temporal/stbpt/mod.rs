@@ -51,7 +51,8 @@
 //!    same vertex data in both frames ([`FrameDelta::triangle_changed`]: the still part of
 //!    a deforming mesh, e.g. the vertices bound to joints that do not move, is reused as
 //!    static geometry is, and the mesh's moving part is answered per frame by the
-//!    multi-frame structure like any dynamic geometry) — the sample continued from x1 by a non-delta lobe, x1 is not near-specular
+//!    multi-frame structure like any dynamic geometry) — the sample continued from x1
+//!    by a non-delta lobe, x1 is not near-specular
 //!    ([`Bsdf::near_specular`]: GGX α < 0.1) while the camera moved (the continuation,
 //!    sampled for f's view, would not cover g's lobe), materials and lights are the same,
 //!    and every segment the subpaths sampled beyond x1 — camera segments after x1, all
@@ -220,8 +221,7 @@
 //! counts neither way. K is the largest distance such that every distance up to it paid.
 //! When distance 1 does not pay, K = 0: the samples serve only their own frame, i.e. the
 //! effort is spent as frame-by-frame `bdpt` spends it, or as `path` spends it when the
-//! frame uses the path
-//! strategies (next section). With motion blur K ≥ 1 (the trajectories need the
+//! frame uses the path strategies (next section). With motion blur K ≥ 1 (the trajectories need the
 //! neighbouring frames). The decision and its statistics are reported per frame
 //! (`reuse_decision` in `run.json`). A frame's splats are scaled by the number of
 //! generated frames that served it, and a frame is output once every frame that may

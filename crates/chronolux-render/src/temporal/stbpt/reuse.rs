@@ -81,25 +81,33 @@ impl Generation<'_> {
                 sv.bsdf.pdf(wo_g, wi) / pf
             }
         };
-        // t ≥ 3: the continuation's density, f's over g's (one direction shared by all
-        // those entries: one evaluation); t = 2: the reverse density at x1 towards the
-        // light vertex, g's over f's (only where the light side has strategies).
+        // t ≥ 3: the continuation's density, f's over g's: one direction shared by all
+        // those strategies, the reused entries' and the recomputed ones', so one
+        // evaluation per landing.
         let cont = entries
             .iter()
             .find(|e| e.continuation && e.split.is_some())
-            .map_or(1.0, |e| 1.0 / view_ratio(e.wi, e.pdf_f));
-        let reweigh = |sp: ViewSplit, t: usize, wi: Vec3, pf: f32, cont: f32| {
+            .map(|e| (e.wi, e.pdf_f))
+            .or_else(|| {
+                let r = regenerated.as_ref().filter(|r| r.cam.len() > 2)?;
+                let wi = r.cam_rays[1].d.normalize();
+                Some((wi, sv.bsdf.pdf(sv.wo, wi)))
+            })
+            .map_or(1.0, |(wi, pf)| 1.0 / view_ratio(wi, pf));
+        // t = 2: the reverse density at x1 towards the light vertex, g's over f's
+        // (`light_ratio`, evaluated only where the light side has strategies).
+        let reweigh = |sp: ViewSplit, t: usize, light_ratio: &dyn Fn() -> f32| {
             if t >= 3 {
                 sp.reweight(rho, cont, 1.0)
             } else if sp.light > 0.0 {
-                sp.reweight(rho, 1.0, view_ratio(wi, pf))
+                sp.reweight(rho, 1.0, light_ratio())
             } else {
                 sp.reweight(rho, 1.0, 1.0)
             }
         };
         let reweight = |e: &Entry| {
             e.split
-                .map_or(1.0, |sp| reweigh(sp, e.t, e.wi, e.pdf_f, cont))
+                .map_or(1.0, |sp| reweigh(sp, e.t, &|| view_ratio(e.wi, e.pdf_f)))
         };
         let kept_entries = entries
             .iter()
@@ -172,10 +180,7 @@ impl Generation<'_> {
                             t,
                         )
                     {
-                        c.l *= {
-                            let pf = sv.bsdf.pdf(sv.wo, wi);
-                            reweigh(sp, t, wi, pf, 1.0 / view_ratio(wi, pf))
-                        };
+                        c.l *= reweigh(sp, t, &|| view_ratio(wi, sv.bsdf.pdf(sv.wo, wi)));
                     }
                     if same_view {
                         l += c.l;

@@ -110,12 +110,16 @@ fn skinned_and_morphed() -> SceneDesc {
 
 /// Instance carrying the geometry of the node named `name`.
 fn instance_of(scene: &FrameScene, desc: &SceneDesc, name: &str) -> usize {
-    let g = scene
+    scene.geometry_instance[geometry_of(scene, desc, name) as usize] as usize
+}
+
+/// Geometry id of the node named `name`.
+fn geometry_of(scene: &FrameScene, desc: &SceneDesc, name: &str) -> u32 {
+    scene
         .geometry
         .iter()
         .position(|g| desc.nodes[g.node.index()].name == name)
-        .unwrap_or_else(|| panic!("no geometry on node {name}"));
-    scene.geometry_instance[g] as usize
+        .unwrap_or_else(|| panic!("no geometry on node {name}")) as u32
 }
 
 fn changed_instances(d: &FrameDelta) -> Vec<usize> {
@@ -190,11 +194,7 @@ fn skinned_and_morphed_meshes_are_deformed_not_moved() {
     // is new (other buffers, other BLAS) but equal, so nothing is deformed.
     let mut b = builder(desc.clone());
     let (x, y) = (b.build(0.5), b.build(0.5));
-    let g = fr[0]
-        .geometry
-        .iter()
-        .position(|g| desc.nodes[g.node.index()].name == "skinned")
-        .unwrap();
+    let g = geometry_of(&fr[0], &desc, "skinned") as usize;
     assert!(!Arc::ptr_eq(
         &x.geometry[g].positions,
         &y.geometry[g].positions
@@ -202,15 +202,6 @@ fn skinned_and_morphed_meshes_are_deformed_not_moved() {
     assert!(FrameDelta::between(&x, &y).is_static());
     // After the clip's end the pose holds: deformed geometry is unchanged.
     assert!(FrameDelta::between(&b.build(2.0), &b.build(2.5)).is_static());
-}
-
-/// Geometry id of the node named `name`.
-fn geometry_of(scene: &FrameScene, desc: &SceneDesc, name: &str) -> u32 {
-    scene
-        .geometry
-        .iter()
-        .position(|g| desc.nodes[g.node.index()].name == name)
-        .unwrap_or_else(|| panic!("no geometry on node {name}")) as u32
 }
 
 /// A deformed mesh changes only where its vertices move: a triangle whose three vertices
@@ -310,12 +301,7 @@ fn segment_dynamic_set_is_the_union_of_pairwise_changes() {
     // segment across the step and static in segments before and after it.
     let desc = stage::caustic();
     let fr = frames(desc.clone(), &[0, 1, 2, 3, 4, 5]);
-    let occluder = fr[0]
-        .geometry
-        .iter()
-        .position(|g| desc.nodes[g.node.index()].name == "occluder")
-        .map(|g| fr[0].geometry_instance[g] as usize)
-        .expect("the caustic scene's occluder");
+    let occluder = instance_of(&fr[0], &desc, "occluder");
     let seg = |r: std::ops::Range<usize>| dynamic_instances(&fr[r].iter().collect::<Vec<_>>());
     assert!(!seg(0..4)[occluder] && !seg(4..6)[occluder] && seg(3..5)[occluder]);
 }

@@ -246,6 +246,7 @@ pub static TECHNIQUE: crate::registry::Preset<PathSettings> = crate::registry::P
     name: "path",
     summary: "unidirectional path tracing with NEE and MIS, frame by frame (the reference)",
     capabilities: crate::motion_blur::FRAME_BY_FRAME_SPP,
+    quality: &[],
     defaults: PathSettings::default,
     build: |s, ctx, name| crate::motion_blur::frame_by_frame(PathTracer::new(s), ctx.shutter, name),
 };

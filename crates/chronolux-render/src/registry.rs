@@ -57,11 +57,44 @@ pub struct BuildContext {
     pub shutter: f32,
 }
 
+/// One level of `render --quality`: every effort setting of one technique, measured to
+/// reach an error on the shared Cornell scene as fast as the measurements found
+/// (BENCHMARKS.md, "The quality table": the time to FLIP of each candidate, and which
+/// won). The levels are measured for denoised renders (the default route); `undenoised`
+/// gives the settings for a render with `--no-denoise` where those were measured too.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct QualityLevel {
+    /// One of [`QUALITIES`].
+    pub name: &'static str,
+    /// The mean HDR-FLIP it reached (cornell-moving, 256², whole animation, 12 scored
+    /// frames against Mitsuba's converged references, denoised).
+    pub flip: f32,
+    /// `(key, JSON value)` set on the technique's defaults when denoising (keys as
+    /// [`set_key`] finds them: `spp` reaches `bdpt.spp` in stbpt's settings).
+    pub denoised: &'static [(&'static str, &'static str)],
+    /// The same for an undenoised render; `None`: not measured, and then an explicit
+    /// `--quality` with `--no-denoise` is an error and the default quality leaves the
+    /// technique's own defaults (which its own benchmarks tuned, undenoised).
+    pub undenoised: Option<&'static [(&'static str, &'static str)]>,
+    /// Open Image Denoise's network at this level (`high` or `fast`).
+    pub denoiser: &'static str,
+}
+
+/// The quality levels, lowest first, as `--quality` names them.
+pub const QUALITIES: [&str; 3] = ["draft", "preview", "final"];
+
+/// The quality `render` uses when none is given: the one that reaches about HDR-FLIP
+/// 0.08 on the shared Cornell scenes (what the peers are compared at).
+pub const DEFAULT_QUALITY: &str = "preview";
+
 /// A technique as the registry sees it (object-safe; implemented by [`Preset`]).
 pub trait Technique: Sync {
     fn name(&self) -> &'static str;
     fn summary(&self) -> &'static str;
     fn capabilities(&self) -> Capabilities;
+    /// Its measured quality levels (none: `--quality` does not apply; its defaults are
+    /// its only effort).
+    fn quality(&self) -> &'static [QualityLevel];
     /// The default settings, every field present.
     fn defaults(&self) -> Value;
     /// Checks `settings` against the settings type and returns them completed and
@@ -76,6 +109,8 @@ pub struct Preset<S> {
     pub name: &'static str,
     pub summary: &'static str,
     pub capabilities: Capabilities,
+    /// Its `--quality` table (empty where none was measured).
+    pub quality: &'static [QualityLevel],
     pub defaults: fn() -> S,
     /// Builds the technique; the name is the preset's (for reports).
     pub build: fn(S, &BuildContext, &'static str) -> Renderer,
@@ -114,6 +149,9 @@ where
     }
     fn capabilities(&self) -> Capabilities {
         self.capabilities
+    }
+    fn quality(&self) -> &'static [QualityLevel] {
+        self.quality
     }
     fn defaults(&self) -> Value {
         serde_json::to_value((self.defaults)()).expect("settings serialise")
@@ -417,6 +455,69 @@ pub fn resolve(
     technique.check(&s)
 }
 
+/// The settings a quality level gives `technique` (its defaults with the level's effort
+/// settings), with the level; `quality`: the `--quality` given (`None`: the default
+/// quality, which leaves the defaults where the technique has no table, or no undenoised
+/// entry when `denoise` is false). An explicit level that is not measured is an error
+/// that says what is.
+pub fn quality_settings(
+    technique: &dyn Technique,
+    quality: Option<&str>,
+    denoise: bool,
+) -> Result<Option<(Value, QualityLevel)>, String> {
+    let name = quality.unwrap_or(DEFAULT_QUALITY);
+    if !QUALITIES.contains(&name) {
+        return Err(format!(
+            "--quality {name}: the levels are {}",
+            QUALITIES.join(", ")
+        ));
+    }
+    let with_table = || names_where_quality().join(", ");
+    let Some(level) = technique.quality().iter().find(|l| l.name == name) else {
+        return match quality {
+            None => Ok(None),
+            Some(_) => Err(format!(
+                "--quality {name}: --method {} has no measured quality table (those with one: {}); set its effort with --spp, --photons or --set",
+                technique.name(),
+                with_table()
+            )),
+        };
+    };
+    let pairs = if denoise {
+        level.denoised
+    } else {
+        match (level.undenoised, quality) {
+            (Some(p), _) => p,
+            (None, None) => return Ok(None),
+            (None, Some(_)) => {
+                return Err(format!(
+                    "--quality {name} of --method {} is measured for denoised renders only; without --no-denoise it applies, or set the effort with --spp, --photons or --set",
+                    technique.name()
+                ));
+            }
+        }
+    };
+    let mut s = technique.defaults();
+    for (k, v) in pairs {
+        set_key(&mut s, k, parse_value(v)).map_err(|e| {
+            format!("quality table of {} ({name}): {e}", technique.name())
+        })?;
+    }
+    let s = technique
+        .check(&s)
+        .map_err(|e| format!("quality table of {} ({name}): {e}", technique.name()))?;
+    Ok(Some((s, *level)))
+}
+
+/// The techniques with a quality table.
+pub fn names_where_quality() -> Vec<&'static str> {
+    TECHNIQUES
+        .iter()
+        .filter(|t| !t.quality().is_empty())
+        .map(|t| t.name())
+        .collect()
+}
+
 /// Applies `--photons N|auto` to photon settings: a count sets `photons` and clears
 /// `auto` where the method has one; `auto` sets the stopping rule's defaults (an error
 /// naming the valid keys for a method without one).
@@ -462,6 +563,44 @@ mod tests {
                 e.key
             );
         }
+    }
+
+    /// Every quality table names the known levels in order, sets keys its technique has
+    /// (the settings check), and its error falls as the level rises.
+    #[test]
+    fn quality_tables_are_well_formed() {
+        for t in TECHNIQUES {
+            let q = t.quality();
+            let names: Vec<&str> = q.iter().map(|l| l.name).collect();
+            if q.is_empty() {
+                assert!(quality_settings(*t, None, true).unwrap().is_none());
+                assert!(quality_settings(*t, Some("final"), true).is_err());
+                continue;
+            }
+            assert_eq!(names, QUALITIES, "{}", t.name());
+            assert!(
+                q.windows(2).all(|w| w[1].flip < w[0].flip),
+                "{}: FLIP not falling",
+                t.name()
+            );
+            for l in q {
+                assert!(["high", "fast"].contains(&l.denoiser), "{}", t.name());
+                for denoise in [true, false] {
+                    match quality_settings(*t, Some(l.name), denoise) {
+                        Ok(Some((s, got))) => {
+                            assert_eq!(got, *l);
+                            let pairs = if denoise { l.denoised } else { l.undenoised.unwrap() };
+                            for (k, v) in pairs {
+                                assert_eq!(get_key(&s, k), Some(&parse_value(v)), "{}", t.name());
+                            }
+                        }
+                        Ok(None) => panic!("{}: an explicit level gave nothing", t.name()),
+                        Err(e) => assert!(!denoise && l.undenoised.is_none(), "{e}"),
+                    }
+                }
+            }
+        }
+        assert!(quality_settings(TECHNIQUES[0], Some("ultra"), true).is_err());
     }
 
     /// `--set spp=0` and `--set max_depth=0` rendered black images without a word; every

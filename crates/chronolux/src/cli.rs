@@ -174,16 +174,29 @@ pub struct RenderArgs {
     #[arg(long, value_name = "LIST")]
     pub passes: Option<String>,
     /// Denoise each frame with Intel Open Image Denoise (albedo and normal passes as
-    /// guides); the EXR's main image is the denoised one and the noisy one is kept as the
-    /// layer ViewLayer.Noisy Image. Needs a build with `--features oidn` (README).
-    #[arg(long)]
+    /// guides): the default wherever the library can be had (the build fetches it; README,
+    /// "Render passes and denoising"), otherwise the run says why and renders without.
+    /// The EXR's main image is the denoised one; the noisy one is kept as the layer
+    /// ViewLayer.Noisy Image. Given explicitly, a missing library is an error.
+    #[arg(long, conflicts_with = "no_denoise")]
     pub denoise: bool,
-    /// Open Image Denoise's quality with --denoise: `high` (its default), `balanced` (the
+    /// Do not denoise: the EXR's main image is the renderer's own estimate.
+    #[arg(long)]
+    pub no_denoise: bool,
+    /// One setting for the effort: `draft`, `preview` (the default: about HDR-FLIP 0.08 on
+    /// the shared Cornell scenes) or `final`. Sets every effort parameter of the method
+    /// (camera samples, photons, windows, the denoiser's network) from its measured table
+    /// in the registry (BENCHMARKS.md, "The quality table"); --spp, --photons, --window,
+    /// --denoise-quality and --set still override. A method without a table keeps its
+    /// defaults (an explicit --quality is then an error naming the methods with one).
+    #[arg(long, value_name = "LEVEL", value_parser = clap::builder::PossibleValuesParser::new(chronolux_render::registry::QUALITIES))]
+    pub quality: Option<String>,
+    /// Open Image Denoise's quality: `high` (its default), `balanced` (the
     /// same network as `high` on a CPU) or `fast` (a smaller network: about half the
     /// filter's CPU time, a higher error at equal samples; it reached equal HDR-FLIP with
     /// 10 % less CPU on the peers' scene on an AMD EPYC: BENCHMARKS.md, "Issue 17: the
     /// denoiser's cost").
-    #[arg(long, value_enum, value_name = "QUALITY", requires = "denoise")]
+    #[arg(long, value_enum, value_name = "QUALITY", conflicts_with = "no_denoise")]
     pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
     /// Render one segment of a farm plan (`chronolux plan`, `chronolux farm`): the plan
     /// fixes every setting, so only --segment, --output, --threads, --resume and

@@ -45,12 +45,16 @@ pub struct RunConfig {
     /// Render passes written as EXR layers.
     #[serde(default)]
     pub passes: chronolux_render::aov::PassSet,
-    /// Denoise with Open Image Denoise (needs the `oidn` build feature).
+    /// Denoise with Open Image Denoise (on by default where the library can be had).
     #[serde(default)]
     pub denoise: bool,
     /// The denoiser's quality (when `denoise`).
     #[serde(default)]
     pub denoise_quality: crate::denoise::DenoiseQuality,
+    /// The `--quality` level whose effort settings `technique` started from (`null`: the
+    /// technique's own defaults; see `registry::quality_settings`).
+    #[serde(default)]
+    pub quality: Option<String>,
 }
 
 /// A `--config` file: a `run.json` (its `settings` are a [`RunConfig`]), a `RunConfig`
@@ -79,6 +83,7 @@ pub struct PartialRun {
     pub passes: Option<chronolux_render::aov::PassSet>,
     pub denoise: Option<bool>,
     pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
+    pub quality: Option<String>,
     pub view: Option<chronolux_io::image::View>,
     /// Recorded in run.json (the automatic exposure found), not a setting: a replay
     /// measures it again, identically.
@@ -87,6 +92,12 @@ pub struct PartialRun {
     /// Recorded in run.json but not part of the configuration (images do not depend on it).
     #[serde(default, rename = "threads")]
     pub _threads: Option<Value>,
+    /// Recorded in run.json: the denoiser's library, or why a default run was not
+    /// denoised. Not settings (the file's `denoise` says whether to denoise).
+    #[serde(default, rename = "denoise_library")]
+    pub _denoise_library: Option<Value>,
+    #[serde(default, rename = "denoise_unavailable")]
+    pub _denoise_unavailable: Option<Value>,
     /// Recorded by `chronolux reference`; not a render setting.
     #[serde(default)]
     pub kind: Option<Value>,

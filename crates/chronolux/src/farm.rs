@@ -221,7 +221,7 @@ pub fn make_plan(render: &RenderArgs, cut_args: &CutArgs) -> Result<Plan> {
     if render.plan.is_some() {
         bail!("--plan belongs to `render`; plan from the render's own flags");
     }
-    let (mut config, _) = resolve(render)?;
+    let (mut config, _, _) = resolve(render)?;
     if let Some(s) = &config.scene
         && !s.starts_with("builtin:")
     {
@@ -320,6 +320,8 @@ pub fn render_segment(args: RenderArgs) -> Result<()> {
         ("--exposure", args.exposure.is_some()),
         ("--passes", args.passes.is_some()),
         ("--denoise", args.denoise),
+        ("--no-denoise", args.no_denoise),
+        ("--quality", args.quality.is_some()),
         ("--denoise-quality", args.denoise_quality.is_some()),
         ("--view", args.view.is_some()),
     ]
@@ -365,6 +367,8 @@ pub fn render_segment(args: RenderArgs) -> Result<()> {
                 compute: seg.compute.clone(),
                 render_before: plan.context.render_before,
             }),
+            // The plan fixed denoising: on where the machine that planned had it.
+            denoise_skipped: None,
         },
     )
 }

@@ -345,7 +345,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
     if args.denoise
         && let Some(why) = crate::denoise::unavailable()
     {
-        bail!("{why}");
+        bail!("--denoise: {why}");
     }
     // The denoiser's quality when every frame is denoised.
     let denoise = args

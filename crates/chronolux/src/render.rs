@@ -111,7 +111,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     if args.plan.is_some() || args.segment.is_some() {
         return crate::farm::render_segment(args);
     }
-    let (config, input) = resolve(&args)?;
+    let (config, input, denoise_skipped) = resolve(&args)?;
     execute(
         &config,
         input,
@@ -121,6 +121,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
             no_preview: args.no_preview,
             threads: args.threads,
             segment: None,
+            denoise_skipped,
         },
     )
 }
@@ -133,10 +134,16 @@ pub struct Exec {
     pub threads: Option<usize>,
     /// A farm segment: only its own frames are written, with its own manifest.
     pub segment: Option<crate::farm::SegmentRun>,
+    /// Why the frames are not denoised although nothing said not to (the denoiser
+    /// cannot be had here): said once and recorded in run.json.
+    pub denoise_skipped: Option<String>,
 }
 
-/// The configuration the flags (and `--config`) give, checked, and the scene loaded.
-pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)> {
+/// The configuration the flags (and `--config`) give, checked, and the scene loaded; and
+/// why the default denoising cannot be done, when it cannot.
+pub fn resolve(
+    args: &RenderArgs,
+) -> Result<(RunConfig, scene_input::SceneInput, Option<String>)> {
     // Everything that can be checked without the scene is checked before loading it.
     let file = args.config.as_deref().map(ConfigFile::read).transpose()?;
     let prev = file.as_ref().map(ConfigFile::run).unwrap_or_default();
@@ -188,14 +195,51 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         Some(p) => PassSet::parse(p).map_err(anyhow::Error::msg)?,
         None => prev.passes.unwrap_or_default(),
     };
-    let denoise = args.denoise || prev.denoise.unwrap_or(false);
+    // Denoised unless told not to: asked (--denoise, or a --config that denoised) it must
+    // be done; by default it is done where the denoiser can be had.
+    let asked = if args.no_denoise {
+        Some(false)
+    } else if args.denoise || args.denoise_quality.is_some() {
+        Some(true)
+    } else {
+        prev.denoise
+    };
+    let (denoise, denoise_skipped) = match asked {
+        Some(true) => match crate::denoise::unavailable() {
+            Some(why) if args.denoise || args.denoise_quality.is_some() => {
+                bail!("--denoise: {why} (--no-denoise renders without)")
+            }
+            Some(why) => bail!(
+                "--config asks for denoising: {why} (--no-denoise renders without)"
+            ),
+            None => (true, None),
+        },
+        Some(false) => (false, None),
+        None => match crate::denoise::unavailable() {
+            Some(why) => (false, Some(why)),
+            None => (true, None),
+        },
+    };
+    // The quality level's effort settings under the config file's and the flags'.
+    let quality_name = args.quality.clone().or(prev.quality.clone());
+    let level = registry::quality_settings(tech, quality_name.as_deref(), denoise)
+        .map_err(anyhow::Error::msg)?;
+    let base = match (&level, base) {
+        (Some((q, _)), Some(b)) => {
+            let mut q = q.clone();
+            registry::merge(&mut q, &b);
+            Some(q)
+        }
+        (Some((q, _)), None) => Some(q.clone()),
+        (None, b) => b,
+    };
     let denoise_quality = args
         .denoise_quality
         .or(prev.denoise_quality)
+        .or(level.as_ref().and_then(|(_, l)| {
+            <crate::denoise::DenoiseQuality as clap::ValueEnum>::from_str(l.denoiser, false).ok()
+        }))
         .unwrap_or_default();
-    if denoise && let Some(why) = crate::denoise::unavailable() {
-        bail!("{why}");
-    }
     let settings = technique_settings(tech, base.as_ref(), &flags, args.photons.as_deref(), &sets)?;
     // Built once here so that a bad combination fails before the scene is loaded.
     let built = tech
@@ -277,9 +321,10 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput)
         passes,
         denoise,
         denoise_quality,
+        quality: level.map(|(_, l)| l.name.to_string()),
         view,
     };
-    Ok((config, input))
+    Ok((config, input, denoise_skipped))
 }
 
 /// Renders `config` (its scene already loaded as `input`) into `exec.output`.
@@ -326,6 +371,17 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     settings_json["threads"] = rayon::current_num_threads().into();
     if config.exposure.is_none() {
         settings_json["auto_exposure"] = exposure.into();
+    }
+    // Where the denoiser came from, or why a default run is not denoised (recorded, not
+    // settings: `--config` reads past them).
+    if config.denoise {
+        settings_json["denoise_library"] = crate::denoise::library()
+            .map(|p| p.display().to_string())
+            .into();
+    }
+    if let Some(why) = &exec.denoise_skipped {
+        log::warn!("rendering without denoising: {why}");
+        settings_json["denoise_unavailable"] = why.clone().into();
     }
     let mut manifest = Manifest::new(
         std::env::args().collect(),

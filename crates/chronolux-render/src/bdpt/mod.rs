@@ -501,6 +501,7 @@ pub static TECHNIQUE: crate::registry::Preset<BdptSettings> = crate::registry::P
     name: "bdpt",
     summary: "bidirectional path tracing, all strategies with MIS, frame by frame",
     capabilities: crate::motion_blur::FRAME_BY_FRAME_SPP,
+    quality: &[],
     defaults: BdptSettings::default,
     build: |s, ctx, name| crate::motion_blur::frame_by_frame(Bdpt::new(s), ctx.shutter, name),
 };

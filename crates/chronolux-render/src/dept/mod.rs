@@ -353,6 +353,7 @@ pub static TECHNIQUE: crate::registry::Preset<DeptSettings> = crate::registry::P
     name: "dept",
     summary: "photon density estimation on mesh elements, frame by frame, no filtering",
     capabilities: DEPT_CAPABILITIES,
+    quality: &[],
     defaults: DeptSettings::default,
     build: build_dept,
 };
@@ -362,6 +363,7 @@ pub static SPATIAL: crate::registry::Preset<DeptSettings> = crate::registry::Pre
     name: "dept-spatial",
     summary: "photon density estimation on mesh elements, spatial Gaussian filter (a preset of dept)",
     capabilities: DEPT_CAPABILITIES,
+    quality: &[],
     defaults: DeptSettings::spatial,
     build: build_dept,
 };
@@ -371,6 +373,7 @@ pub static BILATERAL: crate::registry::Preset<DeptSettings> = crate::registry::P
     name: "dept-bilateral",
     summary: "photon density estimation on mesh elements, spatial bilateral filter (a preset of dept)",
     capabilities: DEPT_CAPABILITIES,
+    quality: &[],
     defaults: DeptSettings::bilateral,
     build: build_dept,
 };

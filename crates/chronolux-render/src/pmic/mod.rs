@@ -533,6 +533,7 @@ pub static TECHNIQUE: crate::registry::Preset<PmIcSettings> = crate::registry::P
             unit: "thousand photons per map and frame",
         },
     },
+    quality: &[],
     defaults: PmIcSettings::default,
     build: |s, _, name| Box::new(PmIc { settings: s, name }),
 };

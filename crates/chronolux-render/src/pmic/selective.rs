@@ -713,6 +713,7 @@ pub static TECHNIQUE: crate::registry::Preset<IcSelectiveSettings> = crate::regi
             unit: "thousand photons per map and frame",
         },
     },
+    quality: &[],
     defaults: IcSelectiveSettings::default,
     build: |s, _, name| Box::new(IcSelective::new(s, name)),
 };

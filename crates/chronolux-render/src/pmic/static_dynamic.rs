@@ -976,6 +976,7 @@ pub static TECHNIQUE: crate::registry::Preset<IcStaticDynamicSettings> = crate::
             unit: "thousand photons per map",
         },
     },
+    quality: &[],
     defaults: IcStaticDynamicSettings::default,
     build: |s, _, name| Box::new(IcStaticDynamic::new(s, name)),
 };

@@ -334,6 +334,7 @@ pub static TECHNIQUE: crate::registry::Preset<SptSettings> = crate::registry::Pr
             unit: "thousand photons in the pool",
         },
     },
+    quality: &[],
     defaults: SptSettings::default,
     build: |s, _, _| Box::new(Spt::new(s)),
 };

@@ -999,6 +999,7 @@ pub static TECHNIQUE: crate::registry::Preset<SpacetimeSettings> = crate::regist
             unit: "thousand photons per frame",
         },
     },
+    quality: &[],
     defaults: SpacetimeSettings::default,
     build: |s, _, _| Box::new(SpacetimeDept::new(s)),
 };

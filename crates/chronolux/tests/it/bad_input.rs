@@ -226,11 +226,11 @@ fn usage_errors_are_one_line() {
     fails(&run(["info", "a.glb", "b.glb"]), &["b.glb"]);
     fails(&render_demo(&["--threads", "0"]), &["--threads"]);
     fails(&render_demo(&["--max-depth", "0"]), &["--max-depth"]);
-    // A missing required argument is named on the line (clap puts it on the next one).
     fails(
-        &render_demo(&["--denoise-quality", "fast"]),
-        &["not provided", "--denoise"],
+        &render_demo(&["--no-denoise", "--denoise-quality", "fast"]),
+        &["--no-denoise", "cannot be used with", "--denoise-quality"],
     );
+    // A missing required argument is named on the line (clap puts it on the next one).
     fails(
         &render_demo(&["--plan", "plan.json"]),
         &["not provided", "--segment"],

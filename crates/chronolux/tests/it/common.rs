@@ -22,14 +22,43 @@ pub fn temp_dir(name: &str) -> PathBuf {
     d
 }
 
-/// Runs `chronolux ARGS` (stdin closed, logging at its default level).
+/// Runs `chronolux ARGS` (stdin closed, logging at its default level). A `render`,
+/// `plan` or `farm` that says nothing of denoising gets `--no-denoise`: the tests of
+/// the renderer's own images (bit-identity, statistics) are about its estimate, and the
+/// default denoising has its own tests ([`run_as_user`]).
 pub fn run<I, S>(args: I) -> Output
+where
+    I: IntoIterator<Item = S>,
+    S: AsRef<std::ffi::OsStr>,
+{
+    let mut args: Vec<std::ffi::OsString> =
+        args.into_iter().map(|a| a.as_ref().to_owned()).collect();
+    let has = |flag: &str| args.iter().any(|a| a == flag);
+    let renders = args
+        .first()
+        .is_some_and(|a| a == "render" || a == "plan" || a == "farm");
+    if renders
+        && !has("--denoise")
+        && !has("--no-denoise")
+        && !has("--denoise-quality")
+        && !has("--plan")
+        && !has("--help")
+    {
+        args.push("--no-denoise".into());
+    }
+    run_as_user(args, &[])
+}
+
+/// Runs `chronolux ARGS` exactly as given, with the environment variables `env` set
+/// (stdin closed, logging at its default level).
+pub fn run_as_user<I, S>(args: I, env: &[(&str, &str)]) -> Output
 where
     I: IntoIterator<Item = S>,
     S: AsRef<std::ffi::OsStr>,
 {
     Command::new(env!("CARGO_BIN_EXE_chronolux"))
         .args(args)
+        .envs(env.iter().copied())
         .env_remove("RUST_LOG")
         .env_remove("RUST_BACKTRACE")
         .stdin(std::process::Stdio::null())

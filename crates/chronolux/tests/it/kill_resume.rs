@@ -17,6 +17,7 @@ const FRAMES: &str = "0..8";
 fn args(dir: &Path) -> Vec<String> {
     [
         "render",
+        "--no-denoise",
         "--frames",
         FRAMES,
         "--resolution",

@@ -897,6 +897,7 @@ pub static TECHNIQUE: crate::registry::Preset<StbptSettings> = crate::registry::
             unit: "samples per pixel generated per frame",
         },
     },
+    quality: &[],
     defaults: StbptSettings::default,
     build: |mut s, ctx, _| {
         s.shutter = ctx.shutter;

@@ -40,7 +40,9 @@ fn main() {
     let (lib, note) = match find() {
         Ok(dir) => (dir.display().to_string(), String::new()),
         Err(why) => {
-            println!("cargo:warning=Open Image Denoise not found: {why}; chronolux will render undenoised unless it finds the library at run time");
+            println!(
+                "cargo:warning=Open Image Denoise not found: {why}; chronolux will render undenoised unless it finds the library at run time"
+            );
             (String::new(), why)
         }
     };
@@ -67,7 +69,11 @@ fn find() -> Result<PathBuf, String> {
         return if has_lib(&lib) {
             Ok(lib)
         } else {
-            Err(format!("OIDN_DIR is set but {} has no {}", lib.display(), lib_name()))
+            Err(format!(
+                "OIDN_DIR is set but {} has no {}",
+                lib.display(),
+                lib_name()
+            ))
         };
     }
     if let Ok(out) = Command::new("pkg-config")
@@ -112,7 +118,12 @@ fn fetch() -> Result<PathBuf, String> {
         .map_err(|e| e.to_string())?;
     let pip = Command::new("python3")
         .args(["-m", "pip", "download", "--no-deps", "--only-binary=:all:"])
-        .args(["--platform", "manylinux2014_x86_64", "--require-hashes", "-q"])
+        .args([
+            "--platform",
+            "manylinux2014_x86_64",
+            "--require-hashes",
+            "-q",
+        ])
         .arg("-r")
         .arg(&req)
         .arg("-d")
@@ -124,8 +135,7 @@ fn fetch() -> Result<PathBuf, String> {
             "python3 -m pip download {WHEEL} failed: {}",
             String::from_utf8_lossy(&pip.stderr)
                 .lines()
-                .filter(|l| !l.trim().is_empty())
-                .last()
+                .rfind(|l| !l.trim().is_empty())
                 .unwrap_or("no message")
         ));
     }
@@ -169,7 +179,11 @@ with zipfile.ZipFile(wheel) as z:
     if has_lib(&lib) {
         Ok(lib)
     } else {
-        Err(format!("{} has no {} after unpacking", lib.display(), lib_name()))
+        Err(format!(
+            "{} has no {} after unpacking",
+            lib.display(),
+            lib_name()
+        ))
     }
 }
 

@@ -246,7 +246,30 @@ pub static TECHNIQUE: crate::registry::Preset<PathSettings> = crate::registry::P
     name: "path",
     summary: "unidirectional path tracing with NEE and MIS, frame by frame (the reference)",
     capabilities: crate::motion_blur::FRAME_BY_FRAME_SPP,
-    quality: &[],
+    // Measured: BENCHMARKS.md, "The quality table".
+    quality: &[
+        crate::registry::QualityLevel {
+            name: "draft",
+            flip: 0.1131,
+            denoised: &[("spp", "2")],
+            undenoised: None,
+            denoiser: "high",
+        },
+        crate::registry::QualityLevel {
+            name: "preview",
+            flip: 0.0778,
+            denoised: &[("spp", "8")],
+            undenoised: None,
+            denoiser: "high",
+        },
+        crate::registry::QualityLevel {
+            name: "final",
+            flip: 0.0562,
+            denoised: &[("spp", "32")],
+            undenoised: None,
+            denoiser: "high",
+        },
+    ],
     defaults: PathSettings::default,
     build: |s, ctx, name| crate::motion_blur::frame_by_frame(PathTracer::new(s), ctx.shutter, name),
 };

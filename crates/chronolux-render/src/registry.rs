@@ -499,9 +499,8 @@ pub fn quality_settings(
     };
     let mut s = technique.defaults();
     for (k, v) in pairs {
-        set_key(&mut s, k, parse_value(v)).map_err(|e| {
-            format!("quality table of {} ({name}): {e}", technique.name())
-        })?;
+        set_key(&mut s, k, parse_value(v))
+            .map_err(|e| format!("quality table of {} ({name}): {e}", technique.name()))?;
     }
     let s = technique
         .check(&s)
@@ -589,7 +588,11 @@ mod tests {
                     match quality_settings(*t, Some(l.name), denoise) {
                         Ok(Some((s, got))) => {
                             assert_eq!(got, *l);
-                            let pairs = if denoise { l.denoised } else { l.undenoised.unwrap() };
+                            let pairs = if denoise {
+                                l.denoised
+                            } else {
+                                l.undenoised.unwrap()
+                            };
                             for (k, v) in pairs {
                                 assert_eq!(get_key(&s, k), Some(&parse_value(v)), "{}", t.name());
                             }

@@ -196,7 +196,12 @@ pub struct RenderArgs {
     /// filter's CPU time, a higher error at equal samples; it reached equal HDR-FLIP with
     /// 10 % less CPU on the peers' scene on an AMD EPYC: BENCHMARKS.md, "Issue 17: the
     /// denoiser's cost").
-    #[arg(long, value_enum, value_name = "QUALITY", conflicts_with = "no_denoise")]
+    #[arg(
+        long,
+        value_enum,
+        value_name = "QUALITY",
+        conflicts_with = "no_denoise"
+    )]
     pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
     /// Render one segment of a farm plan (`chronolux plan`, `chronolux farm`): the plan
     /// fixes every setting, so only --segment, --output, --threads, --resume and

@@ -325,7 +325,8 @@ mod ffi {
             device,
             _lib: lib,
         };
-        d.error().map_err(|e| format!("{}: {e}", d.path.display()))?;
+        d.error()
+            .map_err(|e| format!("{}: {e}", d.path.display()))?;
         // SAFETY: a filter of the committed device; a null handle is checked.
         let filter = unsafe { (d.api.new_filter)(d.device, c"RT".as_ptr()) };
         if filter.is_null() {
@@ -349,7 +350,9 @@ mod ffi {
                 String::new()
             } else {
                 // SAFETY: OIDN's message is a NUL-terminated string.
-                unsafe { CStr::from_ptr(msg) }.to_string_lossy().into_owned()
+                unsafe { CStr::from_ptr(msg) }
+                    .to_string_lossy()
+                    .into_owned()
             };
             Err(format!("error {code}: {text}"))
         }

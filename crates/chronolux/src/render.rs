@@ -141,9 +141,7 @@ pub struct Exec {
 
 /// The configuration the flags (and `--config`) give, checked, and the scene loaded; and
 /// why the default denoising cannot be done, when it cannot.
-pub fn resolve(
-    args: &RenderArgs,
-) -> Result<(RunConfig, scene_input::SceneInput, Option<String>)> {
+pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput, Option<String>)> {
     // Everything that can be checked without the scene is checked before loading it.
     let file = args.config.as_deref().map(ConfigFile::read).transpose()?;
     let prev = file.as_ref().map(ConfigFile::run).unwrap_or_default();
@@ -209,9 +207,7 @@ pub fn resolve(
             Some(why) if args.denoise || args.denoise_quality.is_some() => {
                 bail!("--denoise: {why} (--no-denoise renders without)")
             }
-            Some(why) => bail!(
-                "--config asks for denoising: {why} (--no-denoise renders without)"
-            ),
+            Some(why) => bail!("--config asks for denoising: {why} (--no-denoise renders without)"),
             None => (true, None),
         },
         Some(false) => (false, None),
@@ -220,9 +216,9 @@ pub fn resolve(
             None => (true, None),
         },
     };
-    // The quality level's effort settings under the config file's and the flags'.
-    let quality_name = args.quality.clone().or(prev.quality.clone());
-    let level = registry::quality_settings(tech, quality_name.as_deref(), denoise)
+    // The quality level's effort settings under the config file's and the flags'. A
+    // config file's own level is not asked again: its technique settings carry it.
+    let level = registry::quality_settings(tech, args.quality.as_deref(), denoise)
         .map_err(anyhow::Error::msg)?;
     let base = match (&level, base) {
         (Some((q, _)), Some(b)) => {
@@ -321,7 +317,11 @@ pub fn resolve(
         passes,
         denoise,
         denoise_quality,
-        quality: level.map(|(_, l)| l.name.to_string()),
+        quality: match (&level, &args.quality) {
+            (Some((_, l)), _) => Some(l.name.to_string()),
+            (None, None) => prev.quality.clone(),
+            (None, Some(_)) => None,
+        },
         view,
     };
     Ok((config, input, denoise_skipped))

@@ -999,7 +999,30 @@ pub static TECHNIQUE: crate::registry::Preset<SpacetimeSettings> = crate::regist
             unit: "thousand photons per frame",
         },
     },
-    quality: &[],
+    // Measured: BENCHMARKS.md, "The quality table" (the fastest candidate per level).
+    quality: &[
+        crate::registry::QualityLevel {
+            name: "draft",
+            flip: 0.0938,
+            denoised: &[("spp", "2"), ("photons", "32000")],
+            undenoised: None,
+            denoiser: "high",
+        },
+        crate::registry::QualityLevel {
+            name: "preview",
+            flip: 0.0791,
+            denoised: &[("spp", "4"), ("photons", "64000")],
+            undenoised: None,
+            denoiser: "high",
+        },
+        crate::registry::QualityLevel {
+            name: "final",
+            flip: 0.063,
+            denoised: &[("spp", "4"), ("photons", "256000")],
+            undenoised: None,
+            denoiser: "high",
+        },
+    ],
     defaults: SpacetimeSettings::default,
     build: |s, _, _| Box::new(SpacetimeDept::new(s)),
 };

@@ -226,6 +226,24 @@ fn usage_errors_are_one_line() {
     fails(&run(["info", "a.glb", "b.glb"]), &["b.glb"]);
     fails(&render_demo(&["--threads", "0"]), &["--threads"]);
     fails(&render_demo(&["--max-depth", "0"]), &["--max-depth"]);
+    // --quality: a method without a measured table, an undenoised level not measured.
+    fails(
+        &render_demo(&["--method", "bdpt", "--quality", "final"]),
+        &[
+            "--quality",
+            "bdpt",
+            "no measured quality table",
+            "spacetime-dept",
+        ],
+    );
+    fails(
+        &render_demo(&["--no-denoise", "--quality", "final"]),
+        &["--quality final", "denoised renders only"],
+    );
+    fails(
+        &render_demo(&["--quality", "ultra"]),
+        &["ultra", "--quality"],
+    );
     fails(
         &render_demo(&["--no-denoise", "--denoise-quality", "fast"]),
         &["--no-denoise", "cannot be used with", "--denoise-quality"],

@@ -241,7 +241,10 @@ print(json.dumps(out))
 /// records it; asking for `--denoise` there is a clear error.
 #[test]
 fn without_the_library_the_default_render_is_undenoised_and_says_why() {
-    let missing = [("CHRONOLUX_OIDN_LIB", "/nonexistent/libOpenImageDenoise.so.2")];
+    let missing = [(
+        "CHRONOLUX_OIDN_LIB",
+        "/nonexistent/libOpenImageDenoise.so.2",
+    )];
     let dir = temp_dir("denoise-missing");
     let plain = temp_dir("denoise-missing-plain");
     let args = |out: &std::path::Path, extra: &[&str]| {
@@ -351,12 +354,21 @@ fn denoise_lowers_the_error_and_keeps_the_noisy_image() {
         run_as_user(&args, &[])
     };
     ok(&user(&default_dir, &[]));
-    ok(&user(&plain_dir, &["--no-denoise"]));
+    // The same settings undenoised: the default quality's are for a denoised render, so
+    // they are replayed from its run.json.
+    let default_json = default_dir.join("run.json");
+    ok(&user(
+        &plain_dir,
+        &["--no-denoise", "--config", default_json.to_str().unwrap()],
+    ));
     let default_exr = default_dir.join("frame_0004.exr");
     let run_json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(default_dir.join("run.json")).unwrap())
             .unwrap();
     assert_eq!(run_json["settings"]["denoise"], true, "{run_json}");
+    // The default quality's effort, from the registry's table.
+    assert_eq!(run_json["settings"]["quality"], "preview", "{run_json}");
+    assert_eq!(run_json["settings"]["technique"]["spp"], 4, "{run_json}");
     assert!(
         run_json["settings"]["denoise_library"].is_string(),
         "{run_json}"

@@ -897,7 +897,30 @@ pub static TECHNIQUE: crate::registry::Preset<StbptSettings> = crate::registry::
             unit: "samples per pixel generated per frame",
         },
     },
-    quality: &[],
+    // Measured: BENCHMARKS.md, "The quality table" (window 8, interleave 8: its best route).
+    quality: &[
+        crate::registry::QualityLevel {
+            name: "draft",
+            flip: 0.1044,
+            denoised: &[("window", "8"), ("interleave", "8"), ("spp", "1")],
+            undenoised: None,
+            denoiser: "high",
+        },
+        crate::registry::QualityLevel {
+            name: "preview",
+            flip: 0.0832,
+            denoised: &[("window", "8"), ("interleave", "8"), ("spp", "2")],
+            undenoised: None,
+            denoiser: "high",
+        },
+        crate::registry::QualityLevel {
+            name: "final",
+            flip: 0.0577,
+            denoised: &[("window", "8"), ("interleave", "8"), ("spp", "8")],
+            undenoised: None,
+            denoiser: "high",
+        },
+    ],
     defaults: StbptSettings::default,
     build: |mut s, ctx, _| {
         s.shutter = ctx.shutter;

@@ -248,27 +248,9 @@ pub static TECHNIQUE: crate::registry::Preset<PathSettings> = crate::registry::P
     capabilities: crate::motion_blur::FRAME_BY_FRAME_SPP,
     // Measured: BENCHMARKS.md, "The quality table".
     quality: &[
-        crate::registry::QualityLevel {
-            name: "draft",
-            flip: 0.1131,
-            denoised: &[("spp", "2")],
-            undenoised: None,
-            denoiser: "high",
-        },
-        crate::registry::QualityLevel {
-            name: "preview",
-            flip: 0.0778,
-            denoised: &[("spp", "8")],
-            undenoised: None,
-            denoiser: "high",
-        },
-        crate::registry::QualityLevel {
-            name: "final",
-            flip: 0.0562,
-            denoised: &[("spp", "32")],
-            undenoised: None,
-            denoiser: "high",
-        },
+        crate::registry::QualityLevel::denoised("draft", 0.1131, &[("spp", "2")]),
+        crate::registry::QualityLevel::denoised("preview", 0.0778, &[("spp", "8")]),
+        crate::registry::QualityLevel::denoised("final", 0.0562, &[("spp", "32")]),
     ],
     defaults: PathSettings::default,
     build: |s, ctx, name| crate::motion_blur::frame_by_frame(PathTracer::new(s), ctx.shutter, name),

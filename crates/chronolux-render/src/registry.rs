@@ -80,6 +80,23 @@ pub struct QualityLevel {
     pub denoiser: &'static str,
 }
 
+impl QualityLevel {
+    /// A level measured denoised only (OIDN's `high` network; undenoised not measured).
+    pub const fn denoised(
+        name: &'static str,
+        flip: f32,
+        denoised: &'static [(&'static str, &'static str)],
+    ) -> Self {
+        Self {
+            name,
+            flip,
+            denoised,
+            undenoised: None,
+            denoiser: "high",
+        }
+    }
+}
+
 /// The quality levels, lowest first, as `--quality` names them.
 pub const QUALITIES: [&str; 3] = ["draft", "preview", "final"];
 

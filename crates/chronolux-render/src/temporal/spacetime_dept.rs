@@ -1001,27 +1001,21 @@ pub static TECHNIQUE: crate::registry::Preset<SpacetimeSettings> = crate::regist
     },
     // Measured: BENCHMARKS.md, "The quality table" (the fastest candidate per level).
     quality: &[
-        crate::registry::QualityLevel {
-            name: "draft",
-            flip: 0.0938,
-            denoised: &[("spp", "2"), ("photons", "32000")],
-            undenoised: None,
-            denoiser: "high",
-        },
-        crate::registry::QualityLevel {
-            name: "preview",
-            flip: 0.0791,
-            denoised: &[("spp", "4"), ("photons", "64000")],
-            undenoised: None,
-            denoiser: "high",
-        },
-        crate::registry::QualityLevel {
-            name: "final",
-            flip: 0.063,
-            denoised: &[("spp", "4"), ("photons", "256000")],
-            undenoised: None,
-            denoiser: "high",
-        },
+        crate::registry::QualityLevel::denoised(
+            "draft",
+            0.0938,
+            &[("spp", "2"), ("photons", "32000")],
+        ),
+        crate::registry::QualityLevel::denoised(
+            "preview",
+            0.0791,
+            &[("spp", "4"), ("photons", "64000")],
+        ),
+        crate::registry::QualityLevel::denoised(
+            "final",
+            0.063,
+            &[("spp", "4"), ("photons", "256000")],
+        ),
     ],
     defaults: SpacetimeSettings::default,
     build: |s, _, _| Box::new(SpacetimeDept::new(s)),

@@ -899,27 +899,21 @@ pub static TECHNIQUE: crate::registry::Preset<StbptSettings> = crate::registry::
     },
     // Measured: BENCHMARKS.md, "The quality table" (window 8, interleave 8: its best route).
     quality: &[
-        crate::registry::QualityLevel {
-            name: "draft",
-            flip: 0.1044,
-            denoised: &[("window", "8"), ("interleave", "8"), ("spp", "1")],
-            undenoised: None,
-            denoiser: "high",
-        },
-        crate::registry::QualityLevel {
-            name: "preview",
-            flip: 0.0832,
-            denoised: &[("window", "8"), ("interleave", "8"), ("spp", "2")],
-            undenoised: None,
-            denoiser: "high",
-        },
-        crate::registry::QualityLevel {
-            name: "final",
-            flip: 0.0577,
-            denoised: &[("window", "8"), ("interleave", "8"), ("spp", "8")],
-            undenoised: None,
-            denoiser: "high",
-        },
+        crate::registry::QualityLevel::denoised(
+            "draft",
+            0.1044,
+            &[("window", "8"), ("interleave", "8"), ("spp", "1")],
+        ),
+        crate::registry::QualityLevel::denoised(
+            "preview",
+            0.0832,
+            &[("window", "8"), ("interleave", "8"), ("spp", "2")],
+        ),
+        crate::registry::QualityLevel::denoised(
+            "final",
+            0.0577,
+            &[("window", "8"), ("interleave", "8"), ("spp", "8")],
+        ),
     ],
     defaults: StbptSettings::default,
     build: |mut s, ctx, _| {

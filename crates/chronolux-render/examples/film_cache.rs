@@ -274,10 +274,9 @@ fn main() {
         let (rw, rh) = (480u32, 270u32);
         let mut b = FrameBuilder::new(desc, anim, CameraChoice::First, rw, rh).unwrap();
         let scene = b.build(0.5);
-        let pt = PathTracer::new(PathSettings {
-            spp: 1,
-            ..Default::default()
-        });
+        let mut settings = PathSettings::default();
+        settings.common.spp = 1;
+        let pt = PathTracer::new(settings);
         // On one thread, like the film's figures (CPU seconds of this thread).
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(1)

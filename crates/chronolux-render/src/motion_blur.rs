@@ -84,7 +84,7 @@ pub trait ShutterIntegrator: Integrator + Send {
 impl ShutterIntegrator for PathTracer {
     const NAME: &'static str = "path";
     fn spp(&self) -> u32 {
-        self.settings.spp
+        self.settings.common.spp
     }
     fn render_shutter(
         &self,
@@ -93,14 +93,14 @@ impl ShutterIntegrator for PathTracer {
         progress: &(dyn Fn(u64) + Sync),
     ) -> RenderedFrame {
         let s = &self.settings;
-        render_time_sampled(self, scenes, frame, s.spp, s.seed, progress)
+        render_time_sampled(self, scenes, frame, s.common.spp, s.common.seed, progress)
     }
 }
 
 impl ShutterIntegrator for Bdpt {
     const NAME: &'static str = "bdpt";
     fn spp(&self) -> u32 {
-        self.settings.spp
+        self.settings.common.spp
     }
     fn render_shutter(
         &self,
@@ -115,7 +115,14 @@ impl ShutterIntegrator for Bdpt {
             ..self.settings.clone()
         });
         let s = &plain.settings;
-        render_with_splats_time_sampled(&plain, scenes, frame, s.spp, s.seed, progress)
+        render_with_splats_time_sampled(
+            &plain,
+            scenes,
+            frame,
+            s.common.spp,
+            s.common.seed,
+            progress,
+        )
     }
 }
 
@@ -225,6 +232,7 @@ pub const FRAME_BY_FRAME_SPP: crate::registry::Capabilities = crate::registry::C
     motion_blur: true,
     photons: false,
     window: false,
+    max_depth: true,
     stateless: true,
     effort: crate::registry::Effort {
         key: "spp",

@@ -15,26 +15,27 @@ use chronolux_core::stats::Stats;
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PathSettings {
-    /// Samples per pixel. Default 64.
-    pub spp: u32,
-    /// Longest path in segments from the camera, Mitsuba's `max_depth` convention:
-    /// 1 = emitters seen directly, 2 = direct lighting. `None` = unlimited (Russian
-    /// roulette ends paths). Default `None`.
-    pub max_depth: Option<u32>,
+    /// Camera samples, path depth and seed ([`crate::registry::CommonSettings`]). `spp`:
+    /// Samples per pixel. Default 64. `max_depth`: Longest path in segments from the
+    /// camera, Mitsuba's `max_depth` convention: 1 = emitters seen directly, 2 = direct
+    /// lighting. `None` = unlimited (Russian roulette ends paths). Default `None`. `seed`:
+    /// Seed of all sample streams. Default 0.
+    #[serde(flatten)]
+    pub common: crate::registry::CommonSettings,
     /// Path depth (segments) from which Russian roulette may end a path. Default 5
     /// (Mitsuba's `rr_depth`).
     pub rr_depth: u32,
-    /// Seed of all sample streams. Default 0.
-    pub seed: u64,
 }
 
 impl Default for PathSettings {
     fn default() -> Self {
         PathSettings {
-            spp: 64,
-            max_depth: None,
+            common: crate::registry::CommonSettings {
+                spp: 64,
+                max_depth: None,
+                seed: 0,
+            },
             rr_depth: 5,
-            seed: 0,
         }
     }
 }
@@ -71,7 +72,12 @@ impl PathTracer {
         stats: &mut Stats,
         split: bool,
     ) -> [Rgb; 2] {
-        let max_depth = self.settings.max_depth.unwrap_or(DEPTH_CAP).min(DEPTH_CAP);
+        let max_depth = self
+            .settings
+            .common
+            .max_depth
+            .unwrap_or(DEPTH_CAP)
+            .min(DEPTH_CAP);
         let mut l = [Rgb::ZERO; 2];
         // Non-delta scattering vertices so far (bounces sampled from a non-delta lobe).
         let mut scattered = 0u32;
@@ -221,8 +227,8 @@ impl Integrator for PathTracer {
             self,
             scene,
             frame,
-            self.settings.spp,
-            self.settings.seed,
+            self.settings.common.spp,
+            self.settings.common.seed,
             progress,
         )
     }
@@ -232,11 +238,10 @@ impl Integrator for PathTracer {
     }
 
     fn batch(&self, spp: u32, round: u32, half: u32) -> Option<Box<dyn Integrator + Send>> {
-        Some(Box::new(PathTracer::new(PathSettings {
-            spp,
-            seed: crate::sequence::batch_seed(self.settings.seed, round, half),
-            ..self.settings.clone()
-        })))
+        let mut settings = self.settings.clone();
+        settings.common.spp = spp;
+        settings.common.seed = crate::sequence::batch_seed(settings.common.seed, round, half);
+        Some(Box::new(PathTracer::new(settings)))
     }
 }
 
@@ -253,5 +258,6 @@ pub static TECHNIQUE: crate::registry::Preset<PathSettings> = crate::registry::P
         crate::registry::QualityLevel::denoised("final", 0.0562, &[("spp", "32")]),
     ],
     defaults: PathSettings::default,
+    common: |s| &mut s.common,
     build: |s, ctx, name| crate::motion_blur::frame_by_frame(PathTracer::new(s), ctx.shutter, name),
 };

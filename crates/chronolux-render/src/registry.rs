@@ -42,11 +42,40 @@ pub struct Capabilities {
     pub photons: bool,
     /// It reuses work over a window of neighbouring frames (`--window K`).
     pub window: bool,
+    /// It honours [`CommonSettings::max_depth`] (`--max-depth`); the others refuse a
+    /// depth rather than ignore it.
+    pub max_depth: bool,
     /// Its frames depend only on (seed, frame, pixel, sample index), not on other frames
     /// rendered before them (frame-by-frame baselines).
     pub stateless: bool,
     /// The knob `bench quality` doubles.
     pub effort: Effort,
+}
+
+/// The settings every technique has, flattened into its own settings type
+/// (`#[serde(flatten)] pub common: CommonSettings`, so the keys stay `spp`, `max_depth`
+/// and `seed` at the top of its settings object; a technique that embeds another's
+/// settings, as `stbpt` embeds `bdpt`'s, has them there). The command line's `--spp`,
+/// `--max-depth` and `--seed` reach them through [`Technique::common`] and
+/// [`Technique::with_common`], by type, not by searching key names. Each technique's
+/// defaults (its own `Default`) choose the values; the meaning of `spp` per technique is
+/// in the docs of its settings field.
+///
+/// Worker threads are not here: a technique's images do not depend on them (the
+/// determinism tests across thread counts prove it), so they belong to the run (`render
+/// --threads`), and settings that differ only in threads name the same images (as `render
+/// --resume` and a farm plan compare them).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
+pub struct CommonSettings {
+    /// Camera samples per pixel (at least 1).
+    pub spp: u32,
+    /// Longest light path in segments from the camera, Mitsuba's `max_depth` convention:
+    /// 1 = emitters seen directly, 2 = direct lighting; `None`: unlimited (Russian
+    /// roulette ends paths). Only for the techniques whose [`Capabilities::max_depth`]
+    /// says so; the others refuse a value.
+    pub max_depth: Option<u32>,
+    /// Seed of every sample stream: the same seed gives bit-identical images.
+    pub seed: u64,
 }
 
 /// Everything a technique is built from besides its own settings: what belongs to the
@@ -117,6 +146,10 @@ pub trait Technique: Sync {
     /// Checks `settings` against the settings type and returns them completed and
     /// normalised (every field present, in the type's own form).
     fn check(&self, settings: &Value) -> Result<Value, String>;
+    /// The common block of `settings` (as [`Technique::check`] accepts).
+    fn common(&self, settings: &Value) -> Result<CommonSettings, String>;
+    /// `settings` with their common block replaced by `common`, checked.
+    fn with_common(&self, settings: &Value, common: CommonSettings) -> Result<Value, String>;
     /// Builds the technique from settings (as [`Technique::check`] accepts).
     fn build(&self, settings: &Value, ctx: &BuildContext) -> Result<Renderer, String>;
 }
@@ -129,6 +162,9 @@ pub struct Preset<S> {
     /// Its `--quality` table (empty where none was measured).
     pub quality: &'static [QualityLevel],
     pub defaults: fn() -> S,
+    /// Where its [`CommonSettings`] are (`|s| &mut s.common`; `|s| &mut s.bdpt.common`
+    /// for a technique that embeds another's settings).
+    pub common: fn(&mut S) -> &mut CommonSettings,
     /// Builds the technique; the name is the preset's (for reports).
     pub build: fn(S, &BuildContext, &'static str) -> Renderer,
 }
@@ -144,13 +180,23 @@ where
         merge(&mut full, settings);
         refuse_empty_renders(&full, "")
             .map_err(|e| format!("settings of --method {}: {e}", self.name))?;
-        serde_json::from_value(full).map_err(|e| {
+        let mut s: S = serde_json::from_value(full).map_err(|e| {
             format!(
                 "settings of --method {}: {e} (valid keys: {})",
                 self.name,
                 keys(&full_defaults(self)).join(", ")
             )
-        })
+        })?;
+        if let Some(d) = (self.common)(&mut s).max_depth
+            && !self.capabilities.max_depth
+        {
+            return Err(format!(
+                "settings of --method {}: max_depth = {d}: a path depth is not implemented for it (it is for: {})",
+                self.name,
+                names_where(|c| c.max_depth).join(", ")
+            ));
+        }
+        Ok(s)
     }
 }
 
@@ -176,6 +222,15 @@ where
     fn check(&self, settings: &Value) -> Result<Value, String> {
         let s = self.parse(settings)?;
         Ok(serde_json::to_value(s).expect("settings serialise"))
+    }
+    fn common(&self, settings: &Value) -> Result<CommonSettings, String> {
+        let mut s = self.parse(settings)?;
+        Ok(*(self.common)(&mut s))
+    }
+    fn with_common(&self, settings: &Value, common: CommonSettings) -> Result<Value, String> {
+        let mut s = self.parse(settings)?;
+        *(self.common)(&mut s) = common;
+        self.check(&serde_json::to_value(s).expect("settings serialise"))
     }
     fn build(&self, settings: &Value, ctx: &BuildContext) -> Result<Renderer, String> {
         if ctx.shutter != 0.0 && !self.capabilities.motion_blur {
@@ -629,12 +684,57 @@ mod tests {
     fn zero_samples_or_depth_are_refused_for_every_technique() {
         for t in TECHNIQUES {
             for key in ["spp", "max_depth"] {
-                if find_key(&t.defaults(), key).is_none() {
+                if find_key(&t.defaults(), key).is_none()
+                    || (key == "max_depth" && !t.capabilities().max_depth)
+                {
                     continue;
                 }
                 let e = resolve(*t, None, &[(key.into(), Value::from(0))]).unwrap_err();
                 assert!(e.contains(&format!("{key} = 0")), "{}: {e}", t.name());
                 resolve(*t, None, &[(key.into(), Value::from(1))]).unwrap();
+            }
+        }
+    }
+
+    /// Every technique has the common block, reached by type: `with_common` changes
+    /// exactly the keys `spp`, `seed` and `max_depth` (wherever the technique keeps them:
+    /// `bdpt.spp` in stbpt's settings) and nothing else; a depth is refused by the
+    /// techniques that do not implement one, naming those that do.
+    #[test]
+    fn every_technique_has_the_common_block() {
+        for t in TECHNIQUES {
+            let d = t.defaults();
+            let c = t.common(&d).unwrap();
+            for (key, v) in [("spp", Value::from(c.spp)), ("seed", Value::from(c.seed))] {
+                assert_eq!(get_key(&d, key), Some(&v), "{}: {key}", t.name());
+            }
+            assert_eq!(get_key(&d, "max_depth"), Some(&Value::Null), "{}", t.name());
+            let new = CommonSettings {
+                spp: c.spp + 3,
+                seed: 77,
+                max_depth: None,
+            };
+            let s = t.with_common(&d, new).unwrap();
+            assert_eq!(t.common(&s).unwrap(), new, "{}", t.name());
+            let mut expect = d.clone();
+            set_key(&mut expect, "spp", Value::from(c.spp + 3)).unwrap();
+            set_key(&mut expect, "seed", Value::from(77)).unwrap();
+            assert_eq!(s, expect, "{}: only the common keys change", t.name());
+            let deep = CommonSettings {
+                max_depth: Some(4),
+                ..new
+            };
+            match t.with_common(&d, deep) {
+                Ok(s) => {
+                    assert!(t.capabilities().max_depth, "{}", t.name());
+                    assert_eq!(get_key(&s, "max_depth"), Some(&Value::from(4)));
+                }
+                Err(e) => {
+                    assert!(!t.capabilities().max_depth, "{}: {e}", t.name());
+                    assert!(e.contains("max_depth = 4") && e.contains("path"), "{e}");
+                    let e = resolve(*t, None, &[("max_depth".into(), Value::from(4))]);
+                    assert!(e.is_err(), "{}: --set max_depth=4 accepted", t.name());
+                }
             }
         }
     }

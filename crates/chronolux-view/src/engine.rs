@@ -264,7 +264,7 @@ impl Viewer {
         // The sample index picks the sample stream (as the frame number does for a
         // sequence): successive passes add new samples, and an image restarted over the
         // same solution repeats itself exactly.
-        let f = render_camera_rays(&v, self.state.scene(), self.spp, 1, s.seed, &|_| {});
+        let f = render_camera_rays(&v, self.state.scene(), self.spp, 1, s.common.seed, &|_| {});
         for (acc, p) in self.sum.iter_mut().zip(&f.pixels) {
             *acc += *p;
         }

@@ -257,7 +257,10 @@ fn run_in_pool(a: UpdateArgs) -> Result<()> {
         sb.clone(),
         SptSettings {
             photons: a.photons * a.ref_factor.max(1),
-            seed: base.seed.wrapping_add(0x5eed),
+            common: chronolux_render::registry::CommonSettings {
+                seed: base.common.seed.wrapping_add(0x5eed),
+                ..base.common
+            },
             ..base.clone()
         },
         mesh.clone(),

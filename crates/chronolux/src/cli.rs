@@ -1,5 +1,6 @@
 //! Command-line definitions (clap). Every flag documents its unit and default.
 
+use chronolux_render::registry;
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 
@@ -83,9 +84,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "FPS", allow_negative_numbers = true)]
     pub fps: Option<f32>,
     /// Samples per pixel (1 to 1048576): the technique's `spp` setting. Default: the
-    /// technique's (64 for path and bdpt, 4 generated per frame for stbpt, each serving up to
-    /// 9 frames; 16 camera samples for the photon methods).
-    #[arg(long, value_name = "N")]
+    /// technique's, at the chosen --quality (`--help` lists them).
+    #[arg(long, value_name = "N", long_help = spp_help())]
     pub spp: Option<u32>,
     /// Image size in pixels, WIDTHxHEIGHT (each 1 to 16384). Default: 512 wide, height
     /// from the camera's aspect ratio (square when the camera gives none); 256x256 for the
@@ -94,7 +94,7 @@ pub struct RenderArgs {
     pub resolution: Option<String>,
     /// Longest light path in segments from the camera, as Mitsuba's max_depth: 1 shows
     /// emitters only, 2 adds direct lighting. Default: unlimited (Russian roulette ends paths).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", long_help = max_depth_help())]
     pub max_depth: Option<u32>,
     /// Light-transport method (default `spacetime-dept`). Every technique's settings can be
     /// set with --set; an unknown key (e.g. `--set list=1`) lists the valid ones.
@@ -118,22 +118,17 @@ pub struct RenderArgs {
     /// pixel sample gets a time in the shutter, the scene is built at min(spp, 16) instants.
     /// `stbpt`: each sample's trajectory across the shutter (its point in the neighbouring
     /// frames) is splatted over the pixels it crosses.
-    /// Default 0. Techniques with motion blur: path, bdpt, stbpt.
-    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    /// Default 0.
+    #[arg(long, value_name = "S", allow_negative_numbers = true, long_help = shutter_help())]
     pub shutter: Option<f32>,
-    /// The technique's `window` setting: `stbpt`: each sample serves at most the frames
-    /// f-K..f+K of the one it was made for (0 to 31, default 4; each frame's K is chosen
-    /// from the reuse statistics unless `--set adaptive=false`); `spacetime-dept`: frames
-    /// pooled on each side (default 8).
-    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=31))]
+    /// The technique's `window` setting (0 to 31): how many frames on each side of a frame
+    /// share its work (`--help` lists the methods and their defaults).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(u32).range(0..=31),
+          long_help = window_help())]
     pub window: Option<u32>,
-    /// Photons per frame of the photon methods (`dept`, `dept-spatial`, `dept-bilateral`;
-    /// for `spacetime-dept` the per-frame budget, before pooling over frames): a count
-    /// (e.g. 250000), or `auto` for the stopping rule, which shoots batches until the
-    /// reconstruction's noise is below a 2 % luminance contrast on all but 5 % of the
-    /// (power-weighted) surface, at most 4 million. Default: 500000 (`dept*`), 100000
-    /// (`spacetime-dept`). run.json records the photons of every frame.
-    #[arg(long, value_name = "N|auto")]
+    /// Photons of the photon methods: a count (e.g. 250000), or `auto` for the stopping
+    /// rule where the method has one (`--help` lists the methods and their defaults).
+    #[arg(long, value_name = "N|auto", long_help = photons_help())]
     pub photons: Option<String>,
     /// Seed of every random sequence; the same seed gives bit-identical images. Default 0.
     #[arg(long, value_name = "S")]
@@ -232,7 +227,115 @@ with --set KEY=VALUE; an unknown key lists the valid ones.\n",
         chronolux_render::registry::DEFAULT_METHOD
     );
     for t in chronolux_render::registry::TECHNIQUES {
-        s += &format!("\n  {:<16} {}", t.name(), t.summary());
+        s += &format!("\n  {:<18} {}", t.name(), t.summary());
+    }
+    s
+}
+
+/// What `--spp` sets for each technique and its default there (at the default quality
+/// with denoising, which is how `render` runs by default), from the registry.
+pub fn spp_help() -> String {
+    let mut s = String::from(
+        "Samples per pixel (1 to 1048576): the `spp` of the technique's common settings. \
+Overrides --quality. Defaults, at the default --quality (denoised) where the method has a \
+quality table, else the method's own:\n",
+    );
+    for t in registry::TECHNIQUES {
+        let e = t.capabilities().effort;
+        let what = if e.key == "spp" {
+            e.unit
+        } else {
+            "camera samples per pixel"
+        };
+        let spp = default_settings(*t)
+            .and_then(|v| t.common(&v).ok())
+            .map_or_else(|| "?".into(), |c| c.spp.to_string());
+        s += &format!("\n  {:<18} {spp} {what}", t.name());
+    }
+    s
+}
+
+/// The settings `render` starts from for `t` when no flag is given.
+fn default_settings(t: &dyn registry::Technique) -> Option<serde_json::Value> {
+    match registry::quality_settings(t, None, true) {
+        Ok(Some((s, _))) => Some(s),
+        Ok(None) => Some(t.defaults()),
+        Err(_) => None,
+    }
+}
+
+/// `--max-depth`: which techniques implement a depth limit, from the registry.
+pub fn max_depth_help() -> String {
+    format!(
+        "Longest light path in segments from the camera, as Mitsuba's max_depth: 1 shows \
+emitters only, 2 adds direct lighting (at least 1). Default: unlimited (Russian roulette ends \
+paths). Methods with a depth limit: {}; the others refuse it (their eye walk ends at their \
+`max_specular_depth` setting).",
+        registry::names_where(|c| c.max_depth).join(", ")
+    )
+}
+
+/// `--shutter`: the techniques with motion blur, from the registry.
+pub fn shutter_help() -> String {
+    format!(
+        "Motion blur: fraction of the frame interval the shutter is open, in [0, 1], centred \
+on the frame time (Blender's default); 0 = no motion blur. `path` and `bdpt`: each pixel \
+sample gets a time in the shutter, the scene is built at min(spp, 16) instants. `stbpt`: each \
+sample's trajectory across the shutter (its point in the neighbouring frames) is splatted over \
+the pixels it crosses. Default 0. Methods with motion blur: {}.",
+        registry::names_where(|c| c.motion_blur).join(", ")
+    )
+}
+
+/// `--window`: the windowed techniques with their default windows, from the registry.
+pub fn window_help() -> String {
+    let mut s = String::from(
+        "The technique's `window` setting (0 to 31): frames f-K..f+K share the work made for \
+frame f. `stbpt`: each sample serves at most those frames (each frame's K chosen from the \
+reuse statistics unless `--set adaptive=false`); `spacetime-dept`: photons pooled over them \
+where the animation leaves the light unchanged. Methods with a window, and their defaults:\n",
+    );
+    for t in registry::TECHNIQUES
+        .iter()
+        .filter(|t| t.capabilities().window)
+    {
+        let k = default_settings(*t)
+            .and_then(|v| registry::get_key(&v, "window").cloned())
+            .map_or_else(|| "?".into(), |v| v.to_string());
+        s += &format!("\n  {:<18} {k}", t.name());
+    }
+    s
+}
+
+/// `--photons`: the photon techniques with their default counts, from the registry.
+pub fn photons_help() -> String {
+    let mut s = String::from(
+        "Photons of the photon methods: a count (e.g. 250000), or `auto` for the stopping rule \
+(where the method has one), which shoots batches until the reconstruction's noise is below a \
+2 % luminance contrast on all but 5 % of the (power-weighted) surface, at most 4 million. \
+run.json records the photons of every frame. Methods, their defaults (at the default \
+--quality where they have a table) and what the count is:\n",
+    );
+    for t in registry::TECHNIQUES
+        .iter()
+        .filter(|t| t.capabilities().photons)
+    {
+        let d = default_settings(*t);
+        let n = d
+            .as_ref()
+            .and_then(|v| registry::get_key(v, "photons").cloned())
+            .map_or_else(|| "?".into(), |v| v.to_string());
+        let e = t.capabilities().effort;
+        let unit = e
+            .unit
+            .strip_prefix("thousand ")
+            .unwrap_or("photons per frame");
+        let auto = if d.is_some_and(|v| registry::find_key(&v, "auto").is_some()) {
+            ", or auto"
+        } else {
+            ""
+        };
+        s += &format!("\n  {:<18} {n} {unit}{auto}", t.name());
     }
     s
 }

@@ -4,10 +4,11 @@
 //! bit-identical frames.
 //!
 //! Precedence, lowest first: the technique's defaults (its registry entry), the `--config`
-//! file, the command line's flags (`--spp`, `--window`, …, each mapped to the settings key
-//! of the same name, found as [`registry::find_key`] finds keys), then each `--set
-//! key=value` in order. A flag the chosen technique has no setting for is an error, never
-//! silently ignored.
+//! file, the command line's flags (`--spp`, `--seed` and `--max-depth` set the technique's
+//! [`registry::CommonSettings`] through [`Technique::with_common`]; `--window` and the
+//! other technique-specific flags the settings key of the same name, found as
+//! [`registry::find_key`] finds keys), then each `--set key=value` in order. A flag the
+//! chosen technique has no setting for is an error, never silently ignored.
 
 use anyhow::{Context, Result, bail};
 use chronolux_render::dept::budget::PhotonCount;
@@ -147,6 +148,15 @@ impl ConfigFile {
     }
 }
 
+/// `--spp`, `--seed` and `--max-depth`: the technique's common settings block
+/// ([`registry::CommonSettings`]), which every technique has; `None`: not given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct CommonFlags {
+    pub spp: Option<u32>,
+    pub seed: Option<u64>,
+    pub max_depth: Option<u32>,
+}
+
 /// A command-line flag that names a technique setting.
 pub struct FlagSetting {
     /// The flag as the user typed it (`--window`).
@@ -178,11 +188,28 @@ pub fn parse_sets(sets: &[String]) -> Result<Vec<(String, Value)>> {
 pub fn technique_settings(
     tech: &dyn Technique,
     base: Option<&Value>,
+    common: CommonFlags,
     flags: &[FlagSetting],
     photons: Option<&str>,
     sets: &[(String, Value)],
 ) -> Result<Value> {
     let mut s = registry::resolve(tech, base, &[]).map_err(anyhow::Error::msg)?;
+    if common != CommonFlags::default() {
+        if let Some(d) = common.max_depth
+            && !tech.capabilities().max_depth
+        {
+            bail!(
+                "--max-depth {d}: a path depth is not implemented for --method {} (it is for: {})",
+                tech.name(),
+                registry::names_where(|c| c.max_depth).join(", ")
+            );
+        }
+        let mut c = tech.common(&s).map_err(anyhow::Error::msg)?;
+        c.spp = common.spp.unwrap_or(c.spp);
+        c.seed = common.seed.unwrap_or(c.seed);
+        c.max_depth = common.max_depth.or(c.max_depth);
+        s = tech.with_common(&s, c).map_err(anyhow::Error::msg)?;
+    }
     for f in flags {
         if registry::find_key(&s, f.key).is_none() {
             bail!(

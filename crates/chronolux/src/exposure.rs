@@ -40,8 +40,11 @@ pub fn first_frame_exposure(
     let mut builder = FrameBuilder::new(desc, animation, camera, w, h)?;
     let scene = builder.build(frame_time(frame, fps));
     let pt = PathTracer::new(PathSettings {
-        spp: PREPASS_SPP,
-        seed: 0x45_58_50, // "EXP": independent of the run's own seed
+        common: chronolux_render::registry::CommonSettings {
+            spp: PREPASS_SPP,
+            max_depth: None,
+            seed: 0x45_58_50, // "EXP": independent of the run's own seed
+        },
         ..Default::default()
     });
     let img = pt.render(&scene, frame, &|_| {});

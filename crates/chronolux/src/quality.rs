@@ -12,7 +12,7 @@
 //! is the speed-up.
 
 use crate::cli::SceneArgs;
-use crate::config::{FlagSetting, parse_sets, technique_settings};
+use crate::config::{CommonFlags, FlagSetting, parse_sets, technique_settings};
 use crate::render::{parse_frames, parse_resolution};
 use crate::scene_input;
 use anyhow::{Context, Result, bail};
@@ -267,9 +267,9 @@ pub struct QualityResult {
 }
 
 /// The settings of `method` at `effort` (the unit its registry entry gives: samples per
-/// pixel, or thousands of photons per frame). `max_depth`, `seed` and `window` apply to
-/// the methods that have such a setting (they are given for the pair of methods); the
-/// flags given that did not apply are returned last.
+/// pixel, or thousands of photons per frame). `seed` applies to every method (its common
+/// settings); `max_depth` and `window` to the methods that have them (they are given for
+/// the pair of methods); the flags given that did not apply are returned last.
 pub fn config_for(
     method: &str,
     effort: u32,
@@ -284,8 +284,23 @@ pub fn config_for(
     let defaults = tech.defaults();
     let mut flags = Vec::new();
     let mut photons = None;
+    let mut ignored = Vec::new();
+    let mut common = CommonFlags {
+        seed: Some(seed),
+        ..CommonFlags::default()
+    };
+    if max_depth.is_some() {
+        if tech.capabilities().max_depth {
+            common.max_depth = max_depth;
+        } else {
+            ignored.push("--max-depth");
+        }
+    }
     if tech.capabilities().photons && e.key == "photons" {
         photons = Some(amount.to_string());
+    } else if e.key == "spp" {
+        // Camera samples are the common block's, wherever the technique keeps it.
+        common.spp = Some(u32::try_from(amount).context("effort beyond u32 samples")?);
     } else {
         flags.push(FlagSetting {
             flag: "the effort",
@@ -293,25 +308,18 @@ pub fn config_for(
             value: amount.into(),
         });
     }
-    let optional = [
-        (
-            "--max-depth",
-            "max_depth",
-            max_depth.map(serde_json::Value::from),
-        ),
-        ("--seed", "seed", Some(seed.into())),
-        ("--window", "window", window.map(serde_json::Value::from)),
-    ];
-    let mut ignored = Vec::new();
-    for (flag, key, value) in optional {
-        let Some(value) = value else { continue };
-        if registry::find_key(&defaults, key).is_some() {
-            flags.push(FlagSetting { flag, key, value });
+    if let Some(k) = window {
+        if registry::find_key(&defaults, "window").is_some() {
+            flags.push(FlagSetting {
+                flag: "--window",
+                key: "window",
+                value: k.into(),
+            });
         } else {
-            ignored.push(flag);
+            ignored.push("--window");
         }
     }
-    let s = technique_settings(tech, None, &flags, photons.as_deref(), sets)?;
+    let s = technique_settings(tech, None, common, &flags, photons.as_deref(), sets)?;
     Ok((tech, s, ignored))
 }
 

@@ -1,7 +1,9 @@
 //! `chronolux render`: load → frame builder → technique → frames on disk.
 
 use crate::cli::{RenderArgs, SceneArgs};
-use crate::config::{ConfigFile, FlagSetting, RunConfig, parse_sets, technique_settings};
+use crate::config::{
+    CommonFlags, ConfigFile, FlagSetting, RunConfig, parse_sets, technique_settings,
+};
 use crate::info;
 use crate::scene_input;
 use anyhow::{Context, Result, bail};
@@ -184,9 +186,11 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
             flags.push(FlagSetting { flag, key, value });
         }
     };
-    flag("--spp", "spp", args.spp.map(Into::into));
-    flag("--seed", "seed", args.seed.map(Into::into));
-    flag("--max-depth", "max_depth", args.max_depth.map(Into::into));
+    let common = CommonFlags {
+        spp: args.spp,
+        seed: args.seed,
+        max_depth: args.max_depth,
+    };
     flag("--window", "window", args.window.map(Into::into));
     let sets = parse_sets(&args.set)?;
     let passes = match &args.passes {
@@ -236,7 +240,14 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
             <crate::denoise::DenoiseQuality as clap::ValueEnum>::from_str(l.denoiser, false).ok()
         }))
         .unwrap_or_default();
-    let settings = technique_settings(tech, base.as_ref(), &flags, args.photons.as_deref(), &sets)?;
+    let settings = technique_settings(
+        tech,
+        base.as_ref(),
+        common,
+        &flags,
+        args.photons.as_deref(),
+        &sets,
+    )?;
     // Built once here so that a bad combination fails before the scene is loaded.
     let built = tech
         .build(&settings, &BuildContext { shutter })
@@ -412,9 +423,10 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     };
     let options = run::RunOptions {
         passes,
-        seed: registry::get_key(&config.technique, "seed")
-            .and_then(serde_json::Value::as_u64)
-            .unwrap_or(0),
+        seed: tech
+            .common(&config.technique)
+            .map_err(anyhow::Error::msg)?
+            .seed,
     };
     let progress = Progress::new(w, h, frames.len(), tech.capabilities().stateless);
     progress.say(format!(

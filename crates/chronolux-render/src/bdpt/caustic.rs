@@ -213,11 +213,11 @@ fn eye_walk(
 /// The caustic image of `scene` (module doc): `settings.caustic_photons` photons, then
 /// `settings.spp` eye samples per pixel (box filter, as the film's), pixel-major order.
 pub fn caustic_image(scene: &FrameScene, settings: &BdptSettings) -> (Vec<Rgb>, CausticStats) {
-    let (map, ps) = caustic_map(scene, settings.caustic_photons, settings.seed);
+    let (map, ps) = caustic_map(scene, settings.caustic_photons, settings.common.seed);
     let r_max = LOOKUP.max_radius * scene.bounds.bounding_sphere().1;
     let (w, h) = (scene.camera.width, scene.camera.height);
-    let spp = settings.spp.max(1);
-    let eye_seed = settings.seed ^ EYE_SALT;
+    let spp = settings.common.spp.max(1);
+    let eye_seed = settings.common.seed ^ EYE_SALT;
     let rows = parallel::map_chunks(h as usize, 1, |r| {
         let y = r.start as u32;
         let mut rays = 0u64;

@@ -77,17 +77,17 @@ pub enum MisHeuristic {
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BdptSettings {
-    /// Samples per pixel (each one camera and one light subpath). Default 64.
-    pub spp: u32,
+    /// Camera samples, path depth and seed ([`crate::registry::CommonSettings`]). `spp`:
+    /// Samples per pixel (each one camera and one light subpath). Default 64. `max_depth`:
     /// Longest path in segments from the camera (Mitsuba's `max_depth`, as for
     /// [`crate::pt::PathSettings`]): strategy (s, t) builds s + t − 1 segments. `None` =
-    /// unlimited (Russian roulette ends subpaths). Default `None`.
-    pub max_depth: Option<u32>,
+    /// unlimited (Russian roulette ends subpaths). Default `None`. `seed`: Seed of all
+    /// sample streams. Default 0.
+    #[serde(flatten)]
+    pub common: crate::registry::CommonSettings,
     /// Subpath depth (segments from its endpoint) from which Russian roulette may end a
     /// subpath. Default 5.
     pub rr_depth: u32,
-    /// Seed of all sample streams. Default 0.
-    pub seed: u64,
     /// MIS heuristic. Default power.
     #[serde(default)]
     pub mis: MisHeuristic,
@@ -124,10 +124,12 @@ fn yes() -> bool {
 impl Default for BdptSettings {
     fn default() -> Self {
         BdptSettings {
-            spp: 64,
-            max_depth: None,
+            common: crate::registry::CommonSettings {
+                spp: 64,
+                max_depth: None,
+                seed: 0,
+            },
             rr_depth: 5,
-            seed: 0,
             mis: MisHeuristic::Power,
             light_tracing: true,
             path_strategies: false,
@@ -142,7 +144,7 @@ const DEPTH_CAP: u32 = 1024;
 impl BdptSettings {
     /// Maximum path length in segments.
     pub fn depth(&self) -> u32 {
-        self.max_depth.unwrap_or(DEPTH_CAP).min(DEPTH_CAP)
+        self.common.max_depth.unwrap_or(DEPTH_CAP).min(DEPTH_CAP)
     }
 
     /// Largest number of light vertices s of a strategy with a light subpath of
@@ -156,7 +158,7 @@ impl BdptSettings {
     /// depth unlimited. When it is, the strategies drop the s = 0 contribution of the
     /// paths E S⁺ X S⁺ L and [`caustic::add_caustics`] must add the photon estimate.
     pub fn caustics(&self) -> bool {
-        self.caustic_photons > 0 && self.max_depth.is_none()
+        self.caustic_photons > 0 && self.common.max_depth.is_none()
     }
 }
 
@@ -478,8 +480,8 @@ impl Integrator for Bdpt {
             self,
             scene,
             frame,
-            self.settings.spp,
-            self.settings.seed,
+            self.settings.common.spp,
+            self.settings.common.seed,
             progress,
         );
         caustic::add_caustics(&mut f, scene, &self.settings);
@@ -487,11 +489,10 @@ impl Integrator for Bdpt {
     }
 
     fn batch(&self, spp: u32, round: u32, half: u32) -> Option<Box<dyn Integrator + Send>> {
-        Some(Box::new(Bdpt::new(BdptSettings {
-            spp,
-            seed: crate::sequence::batch_seed(self.settings.seed, round, half),
-            ..self.settings.clone()
-        })))
+        let mut settings = self.settings.clone();
+        settings.common.spp = spp;
+        settings.common.seed = crate::sequence::batch_seed(settings.common.seed, round, half);
+        Some(Box::new(Bdpt::new(settings)))
     }
 }
 
@@ -503,5 +504,6 @@ pub static TECHNIQUE: crate::registry::Preset<BdptSettings> = crate::registry::P
     capabilities: crate::motion_blur::FRAME_BY_FRAME_SPP,
     quality: &[],
     defaults: BdptSettings::default,
+    common: |s| &mut s.common,
     build: |s, ctx, name| crate::motion_blur::frame_by_frame(Bdpt::new(s), ctx.shutter, name),
 };

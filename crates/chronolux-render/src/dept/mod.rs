@@ -26,12 +26,18 @@ use reconstruct::{ElementSolution, Filter, filtered_irradiance_sigma};
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DeptSettings {
+    /// Camera samples, path depth and seed ([`crate::registry::CommonSettings`]). `spp`:
+    /// Camera samples per pixel (direct light and anti-aliasing). Default 16. `max_depth`:
+    /// Longest path in segments from the camera (`--max-depth`, Mitsuba's `max_depth`):
+    /// photons of at most `max_depth − 2` scattering events are deposited and the eye pass
+    /// stops at the same depth ([`view`], "Path depth"). `None` (default): unlimited.
+    /// `seed`: Seed of the photon and camera streams. Default 0.
+    #[serde(flatten)]
+    pub common: crate::registry::CommonSettings,
     /// Photons emitted per frame when `auto` is not set. Default 500 000.
     pub photons: u64,
     /// Stopping rule choosing the photons of each frame ([`budget`]); `None`: `photons`.
     pub auto: Option<AutoPhotons>,
-    /// Camera samples per pixel (direct light and anti-aliasing). Default 16.
-    pub spp: u32,
     /// Target element count along the scene's bounding-box diagonal (element edge =
     /// diagonal / this). 0 (default): chosen from the photons per frame
     /// ([`element_map::auto_elements`]; with `auto`, from its `max_photons`), e.g. 19.7
@@ -45,26 +51,22 @@ pub struct DeptSettings {
     pub max_glossy: u32,
     /// Filtering of the element estimates.
     pub filter: Filter,
-    /// Longest path in segments from the camera (`--max-depth`, Mitsuba's `max_depth`):
-    /// photons of at most `max_depth − 2` scattering events are deposited and the eye
-    /// pass stops at the same depth ([`view`], "Path depth"). `None` (default): unlimited.
-    pub max_depth: Option<u32>,
-    /// Seed of the photon and camera streams. Default 0.
-    pub seed: u64,
 }
 
 impl Default for DeptSettings {
     fn default() -> Self {
         DeptSettings {
+            common: crate::registry::CommonSettings {
+                spp: 16,
+                max_depth: None,
+                seed: 0,
+            },
             photons: 500_000,
             auto: None,
-            spp: 16,
             elements: 0.0,
             max_specular_depth: 8,
             max_glossy: 2,
             filter: Filter::None,
-            max_depth: None,
-            seed: 0,
         }
     }
 }
@@ -153,8 +155,8 @@ impl Dept {
                 scene,
                 &mesh,
                 base + done..base + total,
-                s.seed,
-                element_map::max_photon_bounces(s.max_depth),
+                s.common.seed,
+                element_map::max_photon_bounces(s.common.max_depth),
                 &mut photons,
             );
             let (ind, si) =
@@ -263,9 +265,16 @@ pub fn render_view(
         caustic,
         max_specular_depth: settings.max_specular_depth,
         max_glossy: settings.max_glossy,
-        max_depth: settings.max_depth,
+        max_depth: settings.common.max_depth,
     };
-    render_camera_rays(&view, scene, frame, settings.spp, settings.seed, progress)
+    render_camera_rays(
+        &view,
+        scene,
+        frame,
+        settings.common.spp,
+        settings.common.seed,
+        progress,
+    )
 }
 
 /// Frame-by-frame DEPT as a sequence renderer; each frame's report has its `photons`.
@@ -332,6 +341,7 @@ const DEPT_CAPABILITIES: crate::registry::Capabilities = crate::registry::Capabi
     motion_blur: false,
     photons: true,
     window: false,
+    max_depth: true,
     stateless: true,
     effort: crate::registry::Effort {
         key: "photons",
@@ -355,6 +365,7 @@ pub static TECHNIQUE: crate::registry::Preset<DeptSettings> = crate::registry::P
     capabilities: DEPT_CAPABILITIES,
     quality: &[],
     defaults: DeptSettings::default,
+    common: |s| &mut s.common,
     build: build_dept,
 };
 
@@ -365,6 +376,7 @@ pub static SPATIAL: crate::registry::Preset<DeptSettings> = crate::registry::Pre
     capabilities: DEPT_CAPABILITIES,
     quality: &[],
     defaults: DeptSettings::spatial,
+    common: |s| &mut s.common,
     build: build_dept,
 };
 
@@ -375,5 +387,6 @@ pub static BILATERAL: crate::registry::Preset<DeptSettings> = crate::registry::P
     capabilities: DEPT_CAPABILITIES,
     quality: &[],
     defaults: DeptSettings::bilateral,
+    common: |s| &mut s.common,
     build: build_dept,
 };

@@ -103,14 +103,18 @@ pub const PROBE_STRIDES: [u32; 5] = [16, 8, 4, 2, 1];
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PmIcSettings {
+    /// Camera samples, path depth and seed ([`crate::registry::CommonSettings`]). `spp`:
+    /// Camera samples per pixel (direct light, caustics, anti-aliasing). Default 16.
+    /// `seed`: Seed of the photon, gather and camera streams. Default 0. `max_depth`: not
+    /// implemented (must stay `None`: the eye walk ends at `max_specular_depth`)
+    #[serde(flatten)]
+    pub common: crate::registry::CommonSettings,
     /// Photons per frame for the global map, and as many for the caustic map. Default 100 000.
     pub photons: u64,
     /// Global-map lookups at gather hits.
     pub global: Lookup,
     /// Caustic-map lookups at eye vertices.
     pub caustic: Lookup,
-    /// Camera samples per pixel (direct light, caustics, anti-aliasing). Default 16.
-    pub spp: u32,
     /// Gather strata in θ (M) and φ (N). Defaults 12 × 36 (432 rays).
     pub gather_m: u32,
     pub gather_n: u32,
@@ -125,13 +129,16 @@ pub struct PmIcSettings {
     pub max_glossy_depth: u32,
     /// Use photons `0..N` in every frame instead of `f·N ..`. Default false.
     pub fixed_photons: bool,
-    /// Seed of the photon, gather and camera streams. Default 0.
-    pub seed: u64,
 }
 
 impl Default for PmIcSettings {
     fn default() -> Self {
         PmIcSettings {
+            common: crate::registry::CommonSettings {
+                spp: 16,
+                max_depth: None,
+                seed: 0,
+            },
             photons: 100_000,
             global: Lookup {
                 k: 64,
@@ -143,7 +150,6 @@ impl Default for PmIcSettings {
                 max_radius: 0.03,
                 filter: MapFilter::Cone { k: 1.1 },
             },
-            spp: 16,
             gather_m: 12,
             gather_n: 36,
             cache: CacheParams::default(),
@@ -151,7 +157,6 @@ impl Default for PmIcSettings {
             glossy_alpha: 0.1,
             max_glossy_depth: 3,
             fixed_photons: false,
-            seed: 0,
         }
     }
 }
@@ -277,8 +282,8 @@ pub fn gather_at(
     n: Vec3,
     key: u64,
 ) -> Gather {
-    let mut rng = Pcg32::new(hash_words(&[s.seed, key]), 0x6761_7468);
-    let mut jr = Pcg32::new(hash_words(&[s.seed, key, 1]), 0x6a69_7474);
+    let mut rng = Pcg32::new(hash_words(&[s.common.seed, key]), 0x6761_7468);
+    let mut jr = Pcg32::new(hash_words(&[s.common.seed, key, 1]), 0x6a69_7474);
     gather(
         n,
         s.gather_m,
@@ -413,8 +418,8 @@ pub struct FrameMaps {
 /// Traces the global and caustic photons of photon indices `base .. base + n`.
 pub fn frame_maps(scene: &FrameScene, s: &PmIcSettings, base: u64) -> FrameMaps {
     let n = s.photons;
-    let (g, r1) = global_photons(scene, base..base + n, s.seed, n);
-    let (c, r2) = caustic_photons(scene, base..base + n, s.seed, n);
+    let (g, r1) = global_photons(scene, base..base + n, s.common.seed, n);
+    let (c, r2) = caustic_photons(scene, base..base + n, s.common.seed, n);
     FrameMaps {
         global: PhotonMap::build(g.into_iter().map(|(_, p)| p).collect()),
         caustic: PhotonMap::build(c),
@@ -468,7 +473,7 @@ impl PmIc {
         let maps = frame_maps(scene, s, photon_base(s, frame));
         let t_photons = t0.elapsed().as_secs_f64();
         let mut cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
-        let key = hash_words(&[s.seed, photon_base(s, frame), 0x6963]);
+        let key = hash_words(&[s.common.seed, photon_base(s, frame), 0x6963]);
         let probe_src = view::NoIndirect;
         let probe_view = EyeView::new(s, scene, &maps.caustic, &probe_src);
         let points = probe_points(&probe_view, scene, key);
@@ -487,7 +492,7 @@ impl PmIc {
             unstored: Default::default(),
         };
         let eye = EyeView::new(s, scene, &maps.caustic, &src);
-        let mut out = render_camera_rays(&eye, scene, frame, s.spp, s.seed, progress);
+        let mut out = render_camera_rays(&eye, scene, frame, s.common.spp, s.common.seed, progress);
         out.stats.rays += maps.rays;
         let r = &mut out.report;
         r.insert("photons".into(), s.photons.into());
@@ -526,6 +531,7 @@ pub static TECHNIQUE: crate::registry::Preset<PmIcSettings> = crate::registry::P
         // `--photons` means dept's count-or-stopping-rule; here `--set photons=N`.
         photons: false,
         window: false,
+        max_depth: false,
         stateless: true,
         effort: crate::registry::Effort {
             key: "photons",
@@ -535,5 +541,6 @@ pub static TECHNIQUE: crate::registry::Preset<PmIcSettings> = crate::registry::P
     },
     quality: &[],
     defaults: PmIcSettings::default,
+    common: |s| &mut s.common,
     build: |s, _, name| Box::new(PmIc { settings: s, name }),
 };

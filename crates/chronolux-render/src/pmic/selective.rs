@@ -190,7 +190,7 @@ fn stratum_rngs(seed: u64, cast: u32, id: u64, idx: usize) -> (f32, f32, Pcg32) 
 /// frame `cast`.
 pub fn stratum_dir(s: &PmIcSettings, fr: &Frame, id: u64, idx: usize, cast: u32) -> (Vec3, f32) {
     let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
-    let (xi, psi, _) = stratum_rngs(s.seed, cast, id, idx);
+    let (xi, psi, _) = stratum_rngs(s.common.seed, cast, id, idx);
     stratum_direction(fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi)
 }
 
@@ -208,7 +208,7 @@ pub fn cast_stratum(
     frame: u32,
 ) -> Stratum {
     let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
-    let (xi, psi, mut rng) = stratum_rngs(s.seed, frame, id, idx);
+    let (xi, psi, mut rng) = stratum_rngs(s.common.seed, frame, id, idx);
     let fr = Frame::from_normal(n);
     let (dir, _) = stratum_direction(&fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi);
     match gather_ray_hit(scene, s, &[global], p, n, dir, &mut rng) {
@@ -406,7 +406,7 @@ impl Refresh<'_> {
                 })
                 .collect();
             let mut rng = Pcg32::new(
-                hash_words(&[s.seed, 0x6167_6573, self.frame as u64, r.id]),
+                hash_words(&[s.common.seed, 0x6167_6573, self.frame as u64, r.id]),
                 0x7065_726d,
             );
             for k in select_by_age(&w, left, &mut rng) {
@@ -526,7 +526,7 @@ impl IcSelective {
         let rebuilt = before - kept.len();
 
         // 3. Records in use: valid at a probe point of this frame.
-        let key = hash_words(&[s.seed, photon_base(&s, frame), 0x6963]);
+        let key = hash_words(&[s.common.seed, photon_base(&s, frame), 0x6963]);
         let probe_src = NoIndirect;
         let probe_view = EyeView::new(&s, scene, &maps.caustic, &probe_src);
         let points = probe_points(&probe_view, scene, key);
@@ -654,7 +654,7 @@ impl IcSelective {
             unstored: Default::default(),
         };
         let eye = EyeView::new(&s, scene, &maps.caustic, &src);
-        let mut out = render_camera_rays(&eye, scene, frame, s.spp, s.seed, progress);
+        let mut out = render_camera_rays(&eye, scene, frame, s.common.spp, s.common.seed, progress);
         out.stats.rays += maps.rays;
         let stats = st.store.stats();
         let r = &mut out.report;
@@ -706,6 +706,7 @@ pub static TECHNIQUE: crate::registry::Preset<IcSelectiveSettings> = crate::regi
         motion_blur: false,
         photons: false,
         window: false,
+        max_depth: false,
         stateless: false,
         effort: crate::registry::Effort {
             key: "photons",
@@ -715,5 +716,6 @@ pub static TECHNIQUE: crate::registry::Preset<IcSelectiveSettings> = crate::regi
     },
     quality: &[],
     defaults: IcSelectiveSettings::default,
+    common: |s| &mut s.pmic.common,
     build: |s, _, name| Box::new(IcSelective::new(s, name)),
 };

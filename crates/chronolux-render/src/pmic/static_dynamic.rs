@@ -410,8 +410,13 @@ impl IcStaticDynamic {
         let scene = frames[0].without_instances(&dynamic);
         let (global, caustic) = if lights_static {
             (
-                Stream::trace(&scene, s.photons, s.seed, Keep::All),
-                Stream::trace(&scene, s.photons, caustic_seed(s.seed), Keep::Caustic),
+                Stream::trace(&scene, s.photons, s.common.seed, Keep::All),
+                Stream::trace(
+                    &scene,
+                    s.photons,
+                    caustic_seed(s.common.seed),
+                    Keep::Caustic,
+                ),
             )
         } else {
             (Stream::empty(s.photons), Stream::empty(s.photons))
@@ -494,8 +499,8 @@ impl IcStaticDynamic {
                 seg.caustic_candidates.clone(),
             )
         };
-        let g_new = trace_list(scene, &g_idx, s.seed, n, Keep::All);
-        let c_new = trace_list(scene, &c_idx, caustic_seed(s.seed), n, Keep::Caustic);
+        let g_new = trace_list(scene, &g_idx, s.common.seed, n, Keep::All);
+        let c_new = trace_list(scene, &c_idx, caustic_seed(s.common.seed), n, Keep::Caustic);
         // Rays traced: one per vertex, one per escape.
         let photon_rays = g_new
             .iter()
@@ -568,7 +573,7 @@ impl IcStaticDynamic {
         let t_photons = t0.elapsed().as_secs_f64() - t_segment;
 
         // Cache points of this frame; the static cache where it lacks records.
-        let key = hash_words(&[s.seed, 0, 0x6963]);
+        let key = hash_words(&[s.common.seed, 0, 0x6963]);
         let probe_src = NoIndirect;
         let probe_view = EyeView::new(&s, scene, &caustic, &probe_src);
         let points = probe_points(&probe_view, scene, key);
@@ -742,7 +747,7 @@ impl IcStaticDynamic {
         let src = self.source(&st);
         let scene = &*st.scene;
         let eye = EyeView::new(s, scene, &st.caustic, &src);
-        let mut out = render_camera_rays(&eye, scene, frame, s.spp, s.seed, progress);
+        let mut out = render_camera_rays(&eye, scene, frame, s.common.spp, s.common.seed, progress);
         out.stats.rays += st.photon_rays;
         out.report.extend(st.report.clone());
         out.report
@@ -969,6 +974,7 @@ pub static TECHNIQUE: crate::registry::Preset<IcStaticDynamicSettings> = crate::
         motion_blur: false,
         photons: false,
         window: false,
+        max_depth: false,
         stateless: false,
         effort: crate::registry::Effort {
             key: "photons",
@@ -978,5 +984,6 @@ pub static TECHNIQUE: crate::registry::Preset<IcStaticDynamicSettings> = crate::
     },
     quality: &[],
     defaults: IcStaticDynamicSettings::default,
+    common: |s| &mut s.pmic.common,
     build: |s, _, name| Box::new(IcStaticDynamic::new(s, name)),
 };

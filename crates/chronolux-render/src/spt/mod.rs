@@ -116,6 +116,12 @@ pub enum Reshoot {
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SptSettings {
+    /// Camera samples, path depth and seed ([`crate::registry::CommonSettings`]). `spp`:
+    /// Camera samples per pixel. Default 16. `seed`: Seed of the photon and camera streams.
+    /// Default 0. `max_depth`: not implemented (must stay `None`: the eye walk ends at
+    /// `max_specular_depth`)
+    #[serde(flatten)]
+    pub common: crate::registry::CommonSettings,
     /// Photons in the pool (`Z`, rounded to a multiple of the group count). Default 300 000.
     pub photons: u64,
     /// Target photons per group (`N_g ≈ Z / group_size`). Default 64.
@@ -141,8 +147,6 @@ pub struct SptSettings {
     /// Re-trace the whole pool after each update to count the pilots' misses (costly;
     /// reported as `audit`). Default false.
     pub audit: bool,
-    /// Camera samples per pixel. Default 16.
-    pub spp: u32,
     /// Target element count along the scene's bounding-box diagonal. 0 (default): chosen
     /// from the pool's photons ([`crate::dept::element_map::auto_elements`]; 29 at the
     /// default 300k).
@@ -156,13 +160,16 @@ pub struct SptSettings {
     pub glossy_roughness: f32,
     /// Filtering of the element estimates (default: `dept-spatial`'s Gaussian, radius 2.5).
     pub filter: Filter,
-    /// Seed of the photon and camera streams. Default 0.
-    pub seed: u64,
 }
 
 impl Default for SptSettings {
     fn default() -> Self {
         SptSettings {
+            common: crate::registry::CommonSettings {
+                spp: 16,
+                max_depth: None,
+                seed: 0,
+            },
             photons: 300_000,
             group_size: 64,
             pilot_fraction: 0.07,
@@ -173,13 +180,11 @@ impl Default for SptSettings {
             reshoot: Reshoot::Flagged,
             path_tolerance: 1e-4,
             audit: false,
-            spp: 16,
             elements: 0.0,
             max_specular_depth: 8,
             max_glossy_depth: 2,
             glossy_roughness: 0.5,
             filter: Filter::Gaussian { radius: 2.5 },
-            seed: 0,
         }
     }
 }
@@ -232,7 +237,14 @@ pub fn render_state(
         max_glossy_depth: s.max_glossy_depth,
         glossy_roughness: s.glossy_roughness,
     };
-    render_camera_rays(&v, state.scene(), frame, s.spp, s.seed, progress)
+    render_camera_rays(
+        &v,
+        state.scene(),
+        frame,
+        s.common.spp,
+        s.common.seed,
+        progress,
+    )
 }
 
 /// `spt` as a sequence renderer: frame `f + 1` updates frame `f`'s pool.
@@ -327,6 +339,7 @@ pub static TECHNIQUE: crate::registry::Preset<SptSettings> = crate::registry::Pr
         motion_blur: false,
         photons: true,
         window: false,
+        max_depth: false,
         stateless: false,
         effort: crate::registry::Effort {
             key: "photons",
@@ -336,5 +349,6 @@ pub static TECHNIQUE: crate::registry::Preset<SptSettings> = crate::registry::Pr
     },
     quality: &[],
     defaults: SptSettings::default,
+    common: |s| &mut s.common,
     build: |s, _, _| Box::new(Spt::new(s)),
 };

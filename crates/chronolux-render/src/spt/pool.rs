@@ -457,7 +457,7 @@ impl SptState {
         let pilots = ((settings.pilot_fraction as f64 * layout.members as f64).round() as u64)
             .clamp(1, layout.members);
         let indices: Vec<u64> = (0..n).collect();
-        let (records, _) = trace_records(&scene, &mesh, &indices, settings.seed);
+        let (records, _) = trace_records(&scene, &mesh, &indices, settings.common.seed);
         let mut solution = Solution::new(mesh.element_count());
         for r in &records {
             solution.apply(r, 1.0);
@@ -558,7 +558,8 @@ impl SptState {
                 .flat_map(|g| (0..self.pilots).map(move |m| (g, m)))
                 .map(|(g, m)| self.layout.photon(g, m))
                 .collect();
-            let (new, ps) = trace_records(&self.scene, &self.mesh, &pilots, self.settings.seed);
+            let (new, ps) =
+                trace_records(&self.scene, &self.mesh, &pilots, self.settings.common.seed);
             st.pilots_traced = pilots.len() as u64;
             st.photons_traced += pilots.len() as u64;
             st.rays += ps.rays;
@@ -625,8 +626,12 @@ impl SptState {
                 st.groups_invalidated += 1;
                 let k = match self.settings.order {
                     Order::Random => {
-                        (hash_words(&[self.settings.seed, self.epoch, g as u64, 0x0053_5054]) >> 11)
-                            as f64
+                        (hash_words(&[
+                            self.settings.common.seed,
+                            self.epoch,
+                            g as u64,
+                            0x0053_5054,
+                        ]) >> 11) as f64
                     }
                     // A tiny floor keeps groups that touched a change without a visible
                     // difference in the queue (last).
@@ -696,8 +701,8 @@ impl SptState {
             self.queued[g] = true;
             self.key[g] = match self.settings.order {
                 Order::Random => {
-                    (hash_words(&[self.settings.seed, self.epoch, g as u64, 0x0052_4551]) >> 11)
-                        as f64
+                    (hash_words(&[self.settings.common.seed, self.epoch, g as u64, 0x0052_4551])
+                        >> 11) as f64
                 }
                 _ => f64::MAX,
             };
@@ -767,7 +772,8 @@ impl SptState {
             if groups.is_empty() {
                 break;
             }
-            let (recs, ps) = trace_records(&self.scene, &self.mesh, &indices, self.settings.seed);
+            let (recs, ps) =
+                trace_records(&self.scene, &self.mesh, &indices, self.settings.common.seed);
             st.rays += ps.rays;
             st.photons_traced += indices.len() as u64;
             for (&i, rec) in indices.iter().zip(recs) {
@@ -806,7 +812,7 @@ impl SptState {
     pub fn audit(&self) -> Audit {
         let n = self.layout.photons();
         let indices: Vec<u64> = (0..n).collect();
-        let (recs, _) = trace_records(&self.scene, &self.mesh, &indices, self.settings.seed);
+        let (recs, _) = trace_records(&self.scene, &self.mesh, &indices, self.settings.common.seed);
         let g = self.layout.groups as usize;
         let mut stale = vec![0u64; g];
         for (i, rec) in recs.iter().enumerate() {

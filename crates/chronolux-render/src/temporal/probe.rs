@@ -83,9 +83,11 @@ impl Probe {
 /// these samples, depth limit and seed (so the frame is `path`'s frame bit for bit).
 pub fn path_tracer(spp: u32, max_depth: Option<u32>, seed: u64) -> PathTracer {
     PathTracer::new(PathSettings {
-        spp,
-        max_depth,
-        seed,
+        common: crate::registry::CommonSettings {
+            spp,
+            max_depth,
+            seed,
+        },
         ..PathSettings::default()
     })
 }

@@ -104,13 +104,18 @@ use std::sync::Arc;
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SpacetimeSettings {
+    /// Camera samples, path depth and seed ([`crate::registry::CommonSettings`]). `spp`:
+    /// Camera samples per pixel of each frame. Default 16. `max_depth`: Longest path in
+    /// segments from the camera (`--max-depth`, Mitsuba's `max_depth`), as `dept`'s
+    /// ([`crate::dept::DeptSettings::max_depth`]). `None` (default): unlimited. `seed`:
+    /// Seed of the photon and camera streams. Default 0.
+    #[serde(flatten)]
+    pub common: crate::registry::CommonSettings,
     /// Photons per frame when `auto` is not set. Default 100 000.
     pub photons: u64,
     /// Stopping rule choosing the photons of each frame from the noise of the space-time
     /// reconstruction ([`crate::dept::budget`]); `None`: `photons`.
     pub auto: Option<AutoPhotons>,
-    /// Camera samples per pixel of each frame. Default 16.
-    pub spp: u32,
     /// Past frames whose per-pixel light (the eye pass's light samples) a pixel pools
     /// with its own where the animation leaves its paths unchanged
     /// ([`crate::dept::reuse`]); 0: none; at most `window` is used (a farm segment has
@@ -168,10 +173,6 @@ pub struct SpacetimeSettings {
     pub kernel_photons: f32,
     /// Range kernel width in noise standard deviations. Default 2.
     pub kappa: f32,
-    /// Longest path in segments from the camera (`--max-depth`, Mitsuba's `max_depth`),
-    /// as `dept`'s ([`crate::dept::DeptSettings::max_depth`]). `None` (default):
-    /// unlimited.
-    pub max_depth: Option<u32>,
     /// Below this many pooled photons the range kernel is dropped (plain Gaussian).
     /// Default 8.
     pub min_photons: u32,
@@ -180,16 +181,18 @@ pub struct SpacetimeSettings {
     /// [`crate::temporal::probe`]), and says so in the frame's `path_probe` report.
     /// Default true.
     pub path_probe: bool,
-    /// Seed of the photon and camera streams. Default 0.
-    pub seed: u64,
 }
 
 impl Default for SpacetimeSettings {
     fn default() -> Self {
         SpacetimeSettings {
+            common: crate::registry::CommonSettings {
+                spp: 16,
+                max_depth: None,
+                seed: 0,
+            },
             photons: 100_000,
             auto: None,
-            spp: 16,
             light_history: 8,
             elements: 0.0,
             max_specular_depth: 8,
@@ -203,10 +206,8 @@ impl Default for SpacetimeSettings {
             radius: 2.5,
             kernel_photons: 0.0,
             kappa: 2.0,
-            max_depth: None,
             min_photons: 8,
             path_probe: true,
-            seed: 0,
         }
     }
 }
@@ -675,8 +676,8 @@ impl SpacetimeDept {
                 } else {
                     source.frame(p)
                 };
-                let pt = path_tracer(s.spp, s.max_depth, s.seed);
-                let pr = probe(&sp, p, &pt, s.spp, s.seed);
+                let pt = path_tracer(s.common.spp, s.common.max_depth, s.common.seed);
+                let pr = probe(&sp, p, &pt, s.common.spp, s.common.seed);
                 log::debug!(
                     "spacetime-dept frame {frame}: no per-pixel light reuse possible; path probe of frame {p}: variance ratio {:.3} over {} pixels",
                     pr.variance_ratio,
@@ -692,10 +693,10 @@ impl SpacetimeDept {
         if !path {
             return Err(Some(report));
         }
-        let pt = path_tracer(s.spp, s.max_depth, s.seed);
-        let mut img = render_camera_rays(&pt, scene, frame, s.spp, s.seed, progress);
+        let pt = path_tracer(s.common.spp, s.common.max_depth, s.common.seed);
+        let mut img = render_camera_rays(&pt, scene, frame, s.common.spp, s.common.seed, progress);
         img.report.insert("path_probe".into(), report);
-        img.report.insert("light_spp".into(), s.spp.into());
+        img.report.insert("light_spp".into(), s.common.spp.into());
         Ok(img)
     }
 
@@ -728,8 +729,8 @@ impl SpacetimeDept {
                 sc,
                 &mesh,
                 base..base + n,
-                s.seed,
-                max_photon_bounces(s.max_depth),
+                s.common.seed,
+                max_photon_bounces(s.common.max_depth),
                 &mut t.photons,
             );
             let (rc, rd) = Traced::radii(&mesh, s.change_radius);
@@ -856,8 +857,8 @@ impl SequenceRenderer for SpacetimeDept {
                         scene,
                         &mesh,
                         base + total..base + t,
-                        s.seed,
-                        max_photon_bounces(s.max_depth),
+                        s.common.seed,
+                        max_photon_bounces(s.common.max_depth),
                         &mut tr.photons,
                     );
                     let (rc, rd) = Traced::radii(&mesh, s.change_radius);
@@ -905,11 +906,11 @@ impl SequenceRenderer for SpacetimeDept {
             caustic: &caustic,
             max_specular_depth: s.max_specular_depth,
             max_glossy: s.max_glossy,
-            max_depth: s.max_depth,
+            max_depth: s.common.max_depth,
         };
         let t_pool = t0.elapsed();
         let t0 = std::time::Instant::now();
-        let eye = eye_pass(&view, scene, frame, s.spp, s.seed, progress);
+        let eye = eye_pass(&view, scene, frame, s.common.spp, s.common.seed, progress);
         let t_eye = t0.elapsed();
         // Per-pixel light of the past frames within `light_history` (at most `window`, so
         // that a farm segment's context of `window` frames holds them all).
@@ -931,7 +932,7 @@ impl SequenceRenderer for SpacetimeDept {
                 if !mesh.matches(&sg) || !Validity::between(&sg, scene).may_allow() {
                     continue;
                 }
-                let e = eye_pass(&view, &sg, g, s.spp, s.seed, &|_| {});
+                let e = eye_pass(&view, &sg, g, s.common.spp, s.common.seed, &|_| {});
                 let at = self.history.partition_point(|(h, _, _)| *h < g);
                 self.history.insert(at, (g, sg, e));
             }
@@ -992,6 +993,7 @@ pub static TECHNIQUE: crate::registry::Preset<SpacetimeSettings> = crate::regist
         motion_blur: false,
         photons: true,
         window: true,
+        max_depth: true,
         stateless: false,
         effort: crate::registry::Effort {
             key: "photons",
@@ -1018,6 +1020,7 @@ pub static TECHNIQUE: crate::registry::Preset<SpacetimeSettings> = crate::regist
         ),
     ],
     defaults: SpacetimeSettings::default,
+    common: |s| &mut s.common,
     build: |s, _, _| Box::new(SpacetimeDept::new(s)),
 };
 

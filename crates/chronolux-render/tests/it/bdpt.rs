@@ -18,8 +18,11 @@ use chronolux_render::pt::{PathSettings, PathTracer};
 
 fn bdpt(spp: u32, max_depth: Option<u32>, mis: MisHeuristic) -> Bdpt {
     Bdpt::new(BdptSettings {
-        spp,
-        max_depth,
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            max_depth,
+            ..BdptSettings::default().common
+        },
         mis,
         ..Default::default()
     })
@@ -27,8 +30,11 @@ fn bdpt(spp: u32, max_depth: Option<u32>, mis: MisHeuristic) -> Bdpt {
 
 fn pt(spp: u32, max_depth: Option<u32>) -> PathTracer {
     PathTracer::new(PathSettings {
-        spp,
-        max_depth,
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            max_depth,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     })
 }
@@ -124,7 +130,10 @@ fn bdpt_agrees_with_path_tracer_on_the_demo() {
     // Without the light-tracing strategies (what stbpt uses under a moving camera) the
     // remaining weights still sum to one: the same image in expectation.
     let no_lt = Bdpt::new(BdptSettings {
-        spp: 256,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 256,
+            ..BdptSettings::default().common
+        },
         light_tracing: false,
         ..Default::default()
     })
@@ -331,8 +340,11 @@ fn view_split_reweights_a_path_for_another_camera_exactly() {
     let mut checked = [0usize; 2];
     for mis in [MisHeuristic::Power, MisHeuristic::Balance] {
         let settings = BdptSettings {
+            common: chronolux_render::registry::CommonSettings {
+                max_depth: Some(6),
+                ..BdptSettings::default().common
+            },
             mis,
-            max_depth: Some(6),
             ..Default::default()
         };
         let mut st = Stats::default();

@@ -390,8 +390,11 @@ fn time_samples_are_stratified_over_the_instants() {
 fn shutter_path_tracing_matches_the_analytic_blur_of_a_moving_quad() {
     let spp = 256;
     let tracer = PathTracer::new(PathSettings {
-        spp,
-        max_depth: Some(1),
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            max_depth: Some(1),
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let mut source = crate::source(moving_quad(), IW, IH, FPS, vec![1]);
@@ -493,8 +496,11 @@ fn trajectory_splats_of_a_moving_quad_match_the_analytic_blur() {
 #[test]
 fn time_sampled_frames_do_not_depend_on_the_thread_count() {
     let tracer = PathTracer::new(PathSettings {
-        spp: 16,
-        max_depth: Some(1),
+        common: chronolux_render::registry::CommonSettings {
+            spp: 16,
+            max_depth: Some(1),
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let render = |threads: usize| {
@@ -519,8 +525,11 @@ fn shutter_bdpt_matches_the_analytic_blur_of_a_moving_quad() {
     // time sampling of the splatting driver, not its splats of other instants.
     let spp = 256;
     let bdpt = Bdpt::new(BdptSettings {
-        spp,
-        max_depth: Some(1),
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            max_depth: Some(1),
+            ..BdptSettings::default().common
+        },
         ..Default::default()
     });
     let mut source = crate::source(moving_quad_seen(false), IW, IH, FPS, vec![1]);
@@ -568,14 +577,20 @@ fn shutter_bdpt_and_path_agree_on_the_moving_demo() {
     };
     let p = render(&mut MotionBlur::new(
         PathTracer::new(PathSettings {
-            spp: 256,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 256,
+                ..PathSettings::default().common
+            },
             ..Default::default()
         }),
         1.0,
     ));
     let b = render(&mut MotionBlur::new(
         Bdpt::new(BdptSettings {
-            spp: 64,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 64,
+                ..BdptSettings::default().common
+            },
             ..Default::default()
         }),
         1.0,
@@ -615,8 +630,11 @@ fn shutter_stbpt_matches_the_analytic_blur_of_a_moving_quad() {
     let mut source = crate::source(moving_quad_seen(false), IW, IH, FPS, vec![0, 1, 2]);
     let mut st = Stbpt::new(StbptSettings {
         bdpt: BdptSettings {
-            spp: 4,
-            max_depth: Some(1),
+            common: chronolux_render::registry::CommonSettings {
+                spp: 4,
+                max_depth: Some(1),
+                ..BdptSettings::default().common
+            },
             ..Default::default()
         },
         window: 1,
@@ -639,8 +657,11 @@ fn shutter_stbpt_matches_the_analytic_blur_of_a_moving_quad() {
     assert!((img.pixels[32].x - 8.0 / 12.0).abs() < 1e-3);
     let mut sharp = Stbpt::new(StbptSettings {
         bdpt: BdptSettings {
-            spp: 4,
-            max_depth: Some(1),
+            common: chronolux_render::registry::CommonSettings {
+                spp: 4,
+                max_depth: Some(1),
+                ..BdptSettings::default().common
+            },
             ..Default::default()
         },
         window: 1,

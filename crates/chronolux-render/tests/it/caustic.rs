@@ -88,7 +88,10 @@ fn dropped_paths_equal_the_photon_estimate_through_glass() {
     assert!(pixels >= 30, "the sphere covers {pixels} pixels");
     let off = BdptSettings::default();
     let on = BdptSettings {
-        spp: 64,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 64,
+            ..BdptSettings::default().common
+        },
         caustic_photons: PHOTONS,
         ..Default::default()
     };
@@ -213,8 +216,11 @@ fn caustic_estimate_changes_nothing_else() {
     };
     let render = |scene: &FrameScene, photons: u64, max_depth: Option<u32>| {
         Bdpt::new(BdptSettings {
-            spp: 4,
-            max_depth,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 4,
+                max_depth,
+                ..BdptSettings::default().common
+            },
             caustic_photons: photons,
             ..Default::default()
         })
@@ -234,13 +240,17 @@ fn caustic_estimate_changes_nothing_else() {
     // On: the frame is the strategies' image (without the caustic paths) plus the photon
     // image, added by the technique itself.
     let on = BdptSettings {
-        spp: 4,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 4,
+            ..BdptSettings::default().common
+        },
         caustic_photons: PHOTONS,
         ..Default::default()
     };
     let demo = frame0(stage::demo(), 32, 32);
     let frame = Bdpt::new(on.clone()).render(&demo, 0, &|_| {});
-    let strategies = render_with_splats(&Bdpt::new(on.clone()), &demo, 0, 4, on.seed, &|_| {});
+    let strategies =
+        render_with_splats(&Bdpt::new(on.clone()), &demo, 0, 4, on.common.seed, &|_| {});
     let (photons, _) = caustic_image(&demo, &on);
     let sum: Vec<Rgb> = strategies
         .pixels
@@ -266,7 +276,10 @@ fn stbpt_adds_the_pass_to_each_served_frame_and_nothing_elsewhere() {
     let frames: Vec<u32> = (0..4).collect();
     let settings = |photons| StbptSettings {
         bdpt: BdptSettings {
-            spp: 2,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 2,
+                ..BdptSettings::default().common
+            },
             caustic_photons: photons,
             ..Default::default()
         },

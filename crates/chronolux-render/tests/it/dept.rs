@@ -71,13 +71,19 @@ fn block_errors(img: &[glam::Vec3], reference: &[f64], w: usize) -> (f64, f64) {
 fn dept_converges_to_path_tracing_on_the_cornell_box() {
     let scene = frame0(cornell_box(), 32, 32);
     let pt = PathTracer::new(PathSettings {
-        spp: 1024,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 1024,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let reference = blocks(&pt.render(&scene, 0, &|_| {}).pixels, 32, 8);
     let run = |elements: f32| {
         let d = Dept::new(DeptSettings {
-            spp: 64,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 64,
+                ..DeptSettings::default().common
+            },
             elements,
             photons: 1_000_000,
             ..Default::default()
@@ -205,13 +211,19 @@ fn dept_clusters_a_finely_tessellated_model_and_agrees_with_the_coarse_one() {
             .all(|v| *v == Rgb::ZERO || (v.y - 2.0).abs() < 1e-5)
     );
     let pt = PathTracer::new(PathSettings {
-        spp: 1024,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 1024,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let reference = blocks(&pt.render(&coarse, 0, &|_| {}).pixels, 32, 8);
     let run = |scene| {
         let d = Dept::new(DeptSettings {
-            spp: 64,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 64,
+                ..DeptSettings::default().common
+            },
             elements,
             photons: 1_000_000,
             ..Default::default()
@@ -412,7 +424,10 @@ fn bilateral_filter_keeps_a_step_sharp_and_a_constant_unchanged() {
 fn dept_is_bit_identical_across_thread_counts() {
     let scene = frame0(cornell_box(), 24, 16);
     let d = Dept::new(DeptSettings {
-        spp: 2,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 2,
+            ..DeptSettings::bilateral().common
+        },
         photons: 30_000,
         elements: 30.0,
         ..DeptSettings::bilateral()
@@ -448,7 +463,10 @@ fn spacetime_dept_pools_frames_on_a_static_scene() {
     let (spp, elements) = (16, 50.0);
     // Per-pixel light not pooled: the comparison below relies on the same camera samples.
     let mut st = SpacetimeDept::new(SpacetimeSettings {
-        spp,
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            ..SpacetimeSettings::default().common
+        },
         elements,
         photons: 100_000,
         light_history: 0,
@@ -461,7 +479,10 @@ fn spacetime_dept_pools_frames_on_a_static_scene() {
     let st_img = last.unwrap();
     let dept = |photons: u64| {
         Dept::new(DeptSettings {
-            spp,
+            common: chronolux_render::registry::CommonSettings {
+                spp,
+                ..DeptSettings::default().common
+            },
             elements,
             photons,
             ..Default::default()
@@ -483,7 +504,10 @@ fn spacetime_dept_pools_frames_on_a_static_scene() {
         "space-time rms {e_st} vs frame-by-frame {e_dept}"
     );
     let pt = PathTracer::new(PathSettings {
-        spp: 1024,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 1024,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let reference = blocks(&pt.render(&scene, 0, &|_| {}).pixels, 32, 8);
@@ -510,8 +534,11 @@ fn dept_max_depth_agrees_with_path_tracing_at_that_depth() {
     let scene = frame0(cornell_box(), 32, 32);
     let pt = |d: u32| {
         let img = PathTracer::new(PathSettings {
-            spp: 1024,
-            max_depth: Some(d),
+            common: chronolux_render::registry::CommonSettings {
+                spp: 1024,
+                max_depth: Some(d),
+                ..PathSettings::default().common
+            },
             ..Default::default()
         })
         .render(&scene, 0, &|_| {});
@@ -519,10 +546,13 @@ fn dept_max_depth_agrees_with_path_tracing_at_that_depth() {
     };
     let dept = |d: Option<u32>| {
         let img = Dept::new(DeptSettings {
-            spp: 64,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 64,
+                max_depth: d,
+                ..DeptSettings::default().common
+            },
             elements: 100.0,
             photons: 1_000_000,
-            max_depth: d,
             ..Default::default()
         })
         .render(&scene, 0, &|_| {});
@@ -544,10 +574,13 @@ fn dept_max_depth_agrees_with_path_tracing_at_that_depth() {
 
     let mut src = crate::source(cornell_box(), 32, 32, 24.0, (0..5).collect());
     let mut st = SpacetimeDept::new(SpacetimeSettings {
-        spp: 16,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 16,
+            max_depth: Some(3),
+            ..SpacetimeSettings::default().common
+        },
         elements: 50.0,
         photons: 100_000,
-        max_depth: Some(3),
         ..Default::default()
     });
     let mut last = None;
@@ -575,7 +608,10 @@ fn stopping_rule_shoots_more_photons_for_a_tighter_threshold() {
             ..Default::default()
         };
         let d = Dept::new(DeptSettings {
-            spp: 1,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 1,
+                ..DeptSettings::spatial().common
+            },
             elements: 30.0,
             auto: Some(rule),
             ..DeptSettings::spatial()
@@ -632,12 +668,18 @@ fn diagnose_cornell_block_errors() {
         }
         let scene = frame0(desc, 32, 32);
         let pt = PathTracer::new(PathSettings {
-            spp: 1024,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 1024,
+                ..PathSettings::default().common
+            },
             ..Default::default()
         });
         let reference = blocks(&pt.render(&scene, 0, &|_| {}).pixels, 32, 8);
         let d = Dept::new(DeptSettings {
-            spp: 256,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 256,
+                ..DeptSettings::default().common
+            },
             elements: 100.0,
             photons: 1_000_000,
             ..Default::default()
@@ -646,8 +688,11 @@ fn diagnose_cornell_block_errors() {
         // A second, independent path-traced image (another seed): how far apart two
         // 1024-spp references are.
         let pt2 = PathTracer::new(PathSettings {
-            spp: 1024,
-            seed: 7,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 1024,
+                seed: 7,
+                ..PathSettings::default().common
+            },
             ..Default::default()
         });
         let b2 = blocks(&pt2.render(&scene, 0, &|_| {}).pixels, 32, 8);
@@ -716,7 +761,10 @@ fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
     let frames: Vec<u32> = (0..8).collect();
     let mut src = crate::source(caustic(), 8, 8, 24.0, frames.clone());
     let mut st = SpacetimeDept::new(SpacetimeSettings {
-        spp: 1,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 1,
+            ..SpacetimeSettings::default().common
+        },
         elements,
         photons: 40_000,
         window: 4,
@@ -791,7 +839,10 @@ fn spacetime_window_is_whole_on_a_static_scene() {
     let frames: Vec<u32> = (0..9).collect();
     let mut src = crate::source(cornell_box(), 8, 8, 24.0, frames.clone());
     let mut st = SpacetimeDept::new(SpacetimeSettings {
-        spp: 1,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 1,
+            ..SpacetimeSettings::default().common
+        },
         elements: 30.0,
         photons: 40_000,
         window: 3,
@@ -914,8 +965,11 @@ fn dept_metal_sphere_agrees_with_path_tracing() {
     assert!(sphere.len() >= 40, "{} sphere pixels", sphere.len());
     let path = |seed| {
         PathTracer::new(PathSettings {
-            spp: 512,
-            seed,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 512,
+                seed,
+                ..PathSettings::default().common
+            },
             ..Default::default()
         })
         .render(&scene, 0, &|_| {})
@@ -923,12 +977,14 @@ fn dept_metal_sphere_agrees_with_path_tracing() {
     };
     let dept = |seed, max_glossy| {
         let img = Dept::new(DeptSettings {
-            spp: 128,
-            photons: 1_000_000,
-            // The bias allowance below is derived at 100 elements per diagonal.
+            common: chronolux_render::registry::CommonSettings {
+                spp: 128,
+                seed,
+                ..DeptSettings::spatial().common
+            },
+            photons: 1_000_000, // The bias allowance below is derived at 100 elements per diagonal.
             elements: 100.0,
             max_glossy,
-            seed,
             ..DeptSettings::spatial()
         })
         .render(&scene, 0, &|_| {});
@@ -1032,13 +1088,15 @@ fn pooled_light_agrees_with_the_frames_own(desc: SceneDesc) {
     let run = |seed: u64, light_history: u32, spp: u32| {
         let mut src = crate::source(desc.clone(), w, w, 4.0, (0..7).collect());
         let mut st = SpacetimeDept::new(SpacetimeSettings {
-            spp,
-            light_history,
-            // At least `light_history`: the pixel light pooled is limited to `window`.
+            common: chronolux_render::registry::CommonSettings {
+                spp,
+                seed,
+                ..SpacetimeSettings::default().common
+            },
+            light_history, // At least `light_history`: the pixel light pooled is limited to `window`.
             window: 8,
             elements: 30.0,
             photons: 5_000,
-            seed,
             ..Default::default()
         });
         let mut last = None;
@@ -1385,8 +1443,11 @@ fn dept_direct_light_under_a_sky_agrees_with_path_tracing() {
     let pt = |seed| {
         direct(
             PathTracer::new(PathSettings {
-                spp: 256,
-                seed,
+                common: chronolux_render::registry::CommonSettings {
+                    spp: 256,
+                    seed,
+                    ..PathSettings::default().common
+                },
                 ..Default::default()
             })
             .render(&scene, 0, &|_| {}),
@@ -1394,9 +1455,12 @@ fn dept_direct_light_under_a_sky_agrees_with_path_tracing() {
     };
     let dept = |seed| {
         let img = Dept::new(DeptSettings {
-            spp: 64,
+            common: chronolux_render::registry::CommonSettings {
+                spp: 64,
+                seed,
+                ..DeptSettings::spatial().common
+            },
             photons: 20_000,
-            seed,
             ..DeptSettings::spatial()
         })
         .render(&scene, 0, &|_| {});
@@ -1443,10 +1507,13 @@ fn spacetime_dept_renders_as_path_only_where_the_probe_finds_nothing_to_gain() {
     use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
     let (w, spp, seed) = (24u32, 4u32, 7u64);
     let settings = SpacetimeSettings {
-        spp,
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            seed,
+            ..SpacetimeSettings::default().common
+        },
         photons: 2_000,
         elements: 20.0,
-        seed,
         ..Default::default()
     };
     let mut sky = demo();
@@ -1462,8 +1529,11 @@ fn spacetime_dept_renders_as_path_only_where_the_probe_finds_nothing_to_gain() {
     let mut src = crate::source(sky, w, w, 24.0, frames.clone());
     let mut st = SpacetimeDept::new(settings.clone());
     let pt = PathTracer::new(PathSettings {
-        spp,
-        seed,
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            seed,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let mut lit = 0usize;

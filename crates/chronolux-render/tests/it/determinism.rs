@@ -10,7 +10,10 @@ use chronolux_render::pt::{PathSettings, PathTracer};
 fn bit_identical_across_thread_counts() {
     let scene = frame0(furnace(0.7, 0.3), 40, 24);
     let pt = PathTracer::new(PathSettings {
-        spp: 8,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 8,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let render = |threads: usize| {
@@ -41,7 +44,10 @@ fn bit_identical_across_tile_sizes() {
     use chronolux_render::integrator::render_camera_rays_tiled;
     let scene = frame0(furnace(0.6, 0.4), 37, 21);
     let pt = PathTracer::new(PathSettings {
-        spp: 4,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 4,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let a = render_camera_rays_tiled(&pt, &scene, 1, 4, 9, 16, &|_| {});

@@ -9,8 +9,11 @@ use chronolux_render::pt::{PathSettings, PathTracer};
 fn render(a: f32, le: f32, max_depth: Option<u32>, spp: u32) -> (f64, f64) {
     let scene = frame0(furnace(a, le), 16, 16);
     let pt = PathTracer::new(PathSettings {
-        spp,
-        max_depth,
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            max_depth,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let img = pt.render(&scene, 0, &|_| {});

@@ -19,8 +19,11 @@ use chronolux_render::sequence::SequenceRenderer;
 /// Small settings: few photons, one camera sample, a 6 × 18 gather.
 fn small(photons: u64, m: u32, n: u32) -> PmIcSettings {
     PmIcSettings {
+        common: chronolux_render::registry::CommonSettings {
+            spp: 1,
+            ..PmIcSettings::default().common
+        },
         photons,
-        spp: 1,
         gather_m: m,
         gather_n: n,
         ..Default::default()

@@ -35,8 +35,11 @@ fn path_tracer_converges_to_the_mitsuba_reference() {
     let scene = builder.build(12.0 / 24.0);
     let spp = 32;
     let pt = PathTracer::new(PathSettings {
-        spp,
-        max_depth: Some(8),
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            max_depth: Some(8),
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let img = pt.render(&scene, 12, &|_| {});

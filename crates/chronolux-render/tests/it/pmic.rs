@@ -260,14 +260,20 @@ fn blocks(px: &[glam::Vec3], w: usize, b: usize) -> Vec<f64> {
 fn pm_ic_converges_to_path_tracing_on_the_cornell_box() {
     let scene = frame0(cornell_box(), 32, 32);
     let pt = PathTracer::new(PathSettings {
-        spp: 1024,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 1024,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let reference = blocks(&pt.render(&scene, 0, &|_| {}).pixels, 32, 8);
     let pm = PmIc {
         settings: PmIcSettings {
+            common: chronolux_render::registry::CommonSettings {
+                spp: 64,
+                ..PmIcSettings::default().common
+            },
             photons: 200_000,
-            spp: 64,
             ..Default::default()
         },
         name: "pm-ic",
@@ -297,8 +303,11 @@ fn pm_ic_is_deterministic_across_thread_counts() {
     let scene = frame0(chronolux_core::scene::stage::demo(), 24, 24);
     let pm = PmIc {
         settings: PmIcSettings {
+            common: chronolux_render::registry::CommonSettings {
+                spp: 2,
+                ..PmIcSettings::default().common
+            },
             photons: 20_000,
-            spp: 2,
             ..Default::default()
         },
         name: "pm-ic",
@@ -381,8 +390,11 @@ pub fn cornell_moving() -> SceneDesc {
 
 fn pmic_settings() -> PmIcSettings {
     PmIcSettings {
+        common: chronolux_render::registry::CommonSettings {
+            spp: 8,
+            ..PmIcSettings::default().common
+        },
         photons: 60_000,
-        spp: 8,
         fixed_photons: true,
         ..Default::default()
     }
@@ -487,8 +499,11 @@ fn ic_static_dynamic_is_deterministic_across_thread_counts() {
                 let mut r = IcStaticDynamic::new(
                     IcStaticDynamicSettings {
                         pmic: PmIcSettings {
+                            common: chronolux_render::registry::CommonSettings {
+                                spp: 2,
+                                ..PmIcSettings::default().common
+                            },
                             photons: 20_000,
-                            spp: 2,
                             fixed_photons: true,
                             ..Default::default()
                         },

@@ -16,10 +16,13 @@ use std::sync::Arc;
 
 fn settings(photons: u64) -> SptSettings {
     SptSettings {
+        common: chronolux_render::registry::CommonSettings {
+            spp: 1,
+            ..SptSettings::default().common
+        },
         photons,
         group_size: 32,
         elements: 30.0,
-        spp: 1,
         ..Default::default()
     }
 }
@@ -352,14 +355,20 @@ fn the_eye_pass_agrees_with_dept_spatial_on_the_mean() {
     let mut src = crate::source(demo(), 48, 48, 24.0, vec![0]);
     let scene = src.frame(0);
     let mut spt = Spt::new(SptSettings {
-        spp: 16,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 16,
+            ..settings(100_000).common
+        },
         ..settings(100_000)
     });
     let a = spt.render_frame(&mut src, 0, &|_| {});
     let b = Dept::new(DeptSettings {
+        common: chronolux_render::registry::CommonSettings {
+            spp: 16,
+            ..DeptSettings::spatial().common
+        },
         photons: 100_000,
         elements: 30.0,
-        spp: 16,
         ..DeptSettings::spatial()
     })
     .render(&scene, 0, &|_| {});

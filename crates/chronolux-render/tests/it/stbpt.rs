@@ -45,8 +45,11 @@ fn stbpt_frame(
 fn fixed(k: u32, spp: u32, seed: u64) -> StbptSettings {
     StbptSettings {
         bdpt: BdptSettings {
-            spp,
-            seed,
+            common: chronolux_render::registry::CommonSettings {
+                spp,
+                seed,
+                ..BdptSettings::default().common
+            },
             ..Default::default()
         },
         window: k,
@@ -86,8 +89,11 @@ fn bdpt_reference(
     let mut src = source(desc, W, H, fps, vec![f]);
     let scene = src.frame(f);
     Bdpt::new(BdptSettings {
-        spp,
-        seed: 1234,
+        common: chronolux_render::registry::CommonSettings {
+            spp,
+            seed: 1234,
+            ..BdptSettings::default().common
+        },
         ..Default::default()
     })
     .render(&scene, f, &|_| {})
@@ -375,7 +381,10 @@ fn stbpt_segment(
     let mut src = source(desc.clone(), W, H, fps, compute.collect());
     let mut r = Stbpt::new(StbptSettings {
         bdpt: BdptSettings {
-            spp,
+            common: chronolux_render::registry::CommonSettings {
+                spp,
+                ..BdptSettings::default().common
+            },
             ..Default::default()
         },
         window: k,
@@ -517,8 +526,11 @@ fn stbpt_frames_of_both_strategy_sets_agree_with_bdpt() {
     for seed in 0..runs {
         let settings = StbptSettings {
             bdpt: BdptSettings {
-                spp,
-                seed,
+                common: chronolux_render::registry::CommonSettings {
+                    spp,
+                    seed,
+                    ..BdptSettings::default().common
+                },
                 path_strategies: true,
                 ..Default::default()
             },

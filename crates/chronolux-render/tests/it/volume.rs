@@ -110,7 +110,10 @@ fn scene(hz: f32, scale: Vec3, volume: Option<Volume>) -> SceneDesc {
 fn render(d: SceneDesc) -> Vec<Rgb> {
     let scene = frame0(d, 8, 8);
     let pt = PathTracer::new(PathSettings {
-        spp: 4,
+        common: chronolux_render::registry::CommonSettings {
+            spp: 4,
+            ..PathSettings::default().common
+        },
         ..Default::default()
     });
     let img = pt.render(&scene, 0, &|_| {});

@@ -343,6 +343,52 @@ fn render_help_mentions_every_flag() {
     );
 }
 
+/// The lists in `--help` come from the registry's capabilities, so none can miss a
+/// technique (the hand-written `--photons` list once omitted `spt`): each flag's section
+/// names exactly the techniques that take it, with the default `render` would use.
+#[test]
+fn render_help_lists_the_techniques_from_the_registry() {
+    use chronolux_render::registry::{self, TECHNIQUES};
+    let out = run(["render", "--help"]);
+    let help = stdout(&out);
+    let section = |flag: &str| -> String {
+        let start = help
+            .find(&format!("      {flag} "))
+            .unwrap_or_else(|| panic!("{flag} missing:\n{help}"));
+        let rest = &help[start + flag.len() + 6..];
+        let end = rest.find("\n      --").unwrap_or(rest.len());
+        rest[..end].to_string()
+    };
+    let listed = |text: &str, name: &str| {
+        text.lines()
+            .any(|l| l.split_whitespace().next() == Some(name))
+    };
+    let (spp, photons, window) = (section("--spp"), section("--photons"), section("--window"));
+    for t in TECHNIQUES {
+        let c = t.capabilities();
+        let start = registry::quality_settings(*t, None, true)
+            .unwrap()
+            .map_or_else(|| t.defaults(), |(s, _)| s);
+        let n = t.common(&start).unwrap().spp;
+        assert!(
+            spp.lines()
+                .any(|l| l.split_whitespace().take(2).eq([t.name(), &n.to_string()])),
+            "--spp: {} {n}:\n{spp}",
+            t.name()
+        );
+        assert_eq!(
+            listed(&photons, t.name()),
+            c.photons,
+            "--photons {}",
+            t.name()
+        );
+        assert_eq!(listed(&window, t.name()), c.window, "--window {}", t.name());
+        let names = |f: fn(&registry::Capabilities) -> bool| registry::names_where(f).join(", ");
+        assert!(section("--shutter").contains(&names(|c| c.motion_blur)));
+        assert!(section("--max-depth").contains(&names(|c| c.max_depth)));
+    }
+}
+
 /// A 2×2 quad facing +Z (no material: white) lit head-on by a directional light of
 /// 5000 lux, as engines and Blender export a sun; no camera.
 fn sun_lit_quad(dir: &Path) -> std::path::PathBuf {

@@ -628,13 +628,13 @@ impl Generation<'_> {
 
     /// One sample: generated in f, landed/reused/re-traced in every window frame.
     pub(super) fn sample(&self, px: u32, py: u32, index: u32, sc: &mut Scratch, out: &mut TileOut) {
-        let (seed, f, jf) = (self.bdpt.seed, self.f, self.jf);
+        let (seed, f, jf) = (self.bdpt.common.seed, self.f, self.jf);
         let n = self.scenes.len();
         let scene_f = &self.scenes[jf];
         let all = self.mfa.all_frames();
         // One sequence per pixel for the frames of a block (module doc, "Sample streams"):
         // the samples the frames of a window land in a pixel are stratified together.
-        let (block, idx) = stream_index(f, self.interleave, self.bdpt.spp, index);
+        let (block, idx) = stream_index(f, self.interleave, self.bdpt.common.spp, index);
         let mut cs = PixelSampler::new(seed, block, px, py);
         cs.start_sample(idx);
         let mut ls = PixelSampler::new(seed ^ LIGHT_STREAM, block, px, py);
@@ -1172,7 +1172,7 @@ impl Stbpt {
         let tiles_x = w.div_ceil(TILE);
         let n_tiles = (tiles_x * h.div_ceil(TILE)) as usize;
         let n = frames.len();
-        let spp = self.settings.bdpt.spp;
+        let spp = self.settings.bdpt.common.spp;
         let mut counts = Counts::new(n);
         let mut pilot = Pilot::new(w, h);
         // The pixels generating samples, and of those the ones with all strategies and the

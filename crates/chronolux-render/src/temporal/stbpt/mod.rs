@@ -495,7 +495,10 @@ impl Default for StbptSettings {
             // frame-by-frame `path` at 64 spp for less CPU time (BENCHMARKS.md, "Issue 17:
             // the default") — the effort a first `render` should spend.
             bdpt: BdptSettings {
-                spp: DEFAULT_SPP,
+                common: crate::registry::CommonSettings {
+                    spp: DEFAULT_SPP,
+                    ..BdptSettings::default().common
+                },
                 ..BdptSettings::default()
             },
             window: 4,
@@ -654,13 +657,13 @@ impl Stbpt {
         let empty: Vec<u32> = (0..weights.len() as u32)
             .filter(|&i| weights[i as usize] <= 0.0)
             .collect();
-        let spp = self.settings.bdpt.spp.max(1);
+        let spp = self.settings.bdpt.common.spp.max(1);
         let bdpt = Bdpt::new(BdptSettings {
             light_tracing: false,
             path_strategies: true,
             ..self.settings.bdpt.clone()
         });
-        let seed = self.settings.bdpt.seed ^ FILL_STREAM;
+        let seed = self.settings.bdpt.common.seed ^ FILL_STREAM;
         let chunks = parallel::map_chunks(empty.len(), 64, |range| {
             let mut stats = Stats::default();
             let mut invalid = 0u64;
@@ -751,7 +754,7 @@ impl SequenceRenderer for Stbpt {
         }
         let p = self.pending.remove(&frame).unwrap_or_default();
         let window = p.served_by.max(1);
-        let spp = self.settings.bdpt.spp;
+        let spp = self.settings.bdpt.common.spp;
         let scene = source.frame(frame);
         let (w, h) = (scene.camera.width, scene.camera.height);
         self.open_films(w, h);
@@ -890,6 +893,7 @@ pub static TECHNIQUE: crate::registry::Preset<StbptSettings> = crate::registry::
         motion_blur: true,
         photons: false,
         window: true,
+        max_depth: true,
         stateless: false,
         effort: crate::registry::Effort {
             key: "spp",
@@ -916,6 +920,7 @@ pub static TECHNIQUE: crate::registry::Preset<StbptSettings> = crate::registry::
         ),
     ],
     defaults: StbptSettings::default,
+    common: |s| &mut s.bdpt.common,
     build: |mut s, ctx, _| {
         s.shutter = ctx.shutter;
         Box::new(Stbpt::new(s))

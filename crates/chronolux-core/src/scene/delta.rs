@@ -31,17 +31,26 @@
 //!
 //! Frames of different builders may have different counts; an id present in only one of
 //! the two frames is reported changed.
+//!
+//! # Where
+//!
+//! Besides *what* changed, a delta says *where*: [`FrameDelta::regions`], the world
+//! bounds of every changed instance in each frame of the delta (from its vertices,
+//! slightly padded: [`FrameScene::instance_world_bounds`]). The techniques that keep
+//! work outside a change (dept's pooling validity, spt's path scan) read these instead of
+//! each computing a region its own way.
 
 use super::desc::{Material, Projection};
 use super::frame::{FrameScene, GeometryData};
 use crate::accel::TriRef;
 use crate::camera::Camera;
+use crate::geometry::Bounds3;
 use crate::light::Light;
 use crate::math::{Affine3A, Vec2, Vec3, Vec4};
 use std::sync::Arc;
 
 /// What differs between two frames; see the module documentation for ids and exactness.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct FrameDelta {
     /// Per instance: its placement (`world_from_object`, geometry base) differs.
     moved: Vec<bool>,
@@ -53,11 +62,27 @@ pub struct FrameDelta {
     materials: Vec<bool>,
     camera: bool,
     bounds: bool,
+    /// Where: the changed instances' bounds in each frame (see [`Region`]).
+    regions: Vec<Region>,
+}
+
+/// One changed instance in one frame of a delta: its world bounds there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Region {
+    /// The instance id.
+    pub instance: u32,
+    /// Which frame of the delta: 0 and 1 for [`FrameDelta::between`]'s `a` and `b`; the
+    /// frame's index in the segment for [`FrameDelta::over`].
+    pub frame: u32,
+    /// Its world bounds in that frame (from its vertices, padded as
+    /// [`FrameScene::instance_world_bounds`] pads).
+    pub bounds: Bounds3,
 }
 
 impl FrameDelta {
-    /// What differs between frames `a` and `b` (symmetric: `between(a, b) ==
-    /// between(b, a)`, and `between(a, a)` reports nothing changed).
+    /// What differs between frames `a` and `b` (symmetric in what changed: `between(b, a)`
+    /// reports the same, with the regions' frames 0 and 1 swapped; `between(a, a)`
+    /// reports nothing changed).
     pub fn between(a: &FrameScene, b: &FrameScene) -> FrameDelta {
         let (ia, ib) = (a.accel.instances(), b.accel.instances());
         let n_inst = ia.len().max(ib.len());
@@ -120,6 +145,9 @@ impl FrameDelta {
                 })
                 .collect()
         };
+        let changed = |i: usize| moved[i] || deformed[i];
+        let mut regions = regions_in(a, 0, &changed);
+        regions.extend(regions_in(b, 1, &changed));
         FrameDelta {
             moved,
             deformed,
@@ -127,19 +155,45 @@ impl FrameDelta {
             materials,
             camera: !same_camera(&a.camera, &b.camera),
             bounds,
+            regions,
         }
+    }
+
+    /// The changed instances' bounds in each frame of the delta, frame by frame, each in
+    /// instance order.
+    pub fn regions(&self) -> &[Region] {
+        &self.regions
+    }
+
+    /// The bounds of every [`Region`] (every frame), in [`FrameDelta::regions`]' order.
+    pub fn changed_bounds(&self) -> Vec<Bounds3> {
+        self.regions.iter().map(|r| r.bounds).collect()
+    }
+
+    /// The changed instances' bounds in frame `frame` of the delta (1: `between`'s `b`,
+    /// the frame a technique moves to).
+    pub fn changed_bounds_in(&self, frame: u32) -> Vec<Bounds3> {
+        self.regions
+            .iter()
+            .filter(|r| r.frame == frame)
+            .map(|r| r.bounds)
+            .collect()
     }
 
     /// What changes anywhere in a segment of frames (in time order): the union of
     /// [`FrameDelta::between`] over consecutive frames. Because equality here is exact
     /// (an equivalence), an element is reported changed iff it is not the same in every
     /// frame of the segment; e.g. the segment's *static scene* is the instances with
-    /// `!instance_changed(i)`. One frame or none: nothing changed.
+    /// `!instance_changed(i)`. One frame or none: nothing changed. Its regions are those of
+    /// each consecutive pair, numbered as the segment's frames (an instance that changes
+    /// in two pairs has its middle frame's bounds twice; one that changes in none, none):
+    /// together they cover everywhere a changed instance was in the segment.
     pub fn over(frames: &[&FrameScene]) -> FrameDelta {
         let mut d = FrameDelta::default();
-        for w in frames.windows(2) {
-            d.merge(&FrameDelta::between(w[0], w[1]));
+        for (k, w) in frames.windows(2).enumerate() {
+            d.merge_at(&FrameDelta::between(w[0], w[1]), k as u32);
         }
+
         if d.moved.is_empty()
             && let Some(f) = frames.first()
         {
@@ -148,8 +202,19 @@ impl FrameDelta {
         d
     }
 
-    /// Adds what `other` reports changed (element-wise or; longer lists extend).
+    /// Adds what `other` reports changed (element-wise or; longer lists extend; its
+    /// regions are appended as they are).
     pub fn merge(&mut self, other: &FrameDelta) {
+        self.merge_at(other, 0);
+    }
+
+    /// [`FrameDelta::merge`] of the delta between frames `first` and `first + 1` of a
+    /// segment: its regions' frames are renumbered as the segment's.
+    pub fn merge_at(&mut self, other: &FrameDelta, first: u32) {
+        self.regions.extend(other.regions.iter().map(|r| Region {
+            frame: r.frame + first,
+            ..*r
+        }));
         fn or(a: &mut Vec<bool>, b: &[bool]) {
             if a.len() < b.len() {
                 a.resize(b.len(), false);
@@ -298,6 +363,23 @@ impl FrameDelta {
 /// segment's static part as the instances marked `false`.
 pub fn dynamic_instances(frames: &[&FrameScene]) -> Vec<bool> {
     FrameDelta::over(frames).dynamic_instances()
+}
+
+/// The [`Region`]s of `scene` (frame `frame` of a delta) of the instances `changed` picks.
+fn regions_in(scene: &FrameScene, frame: u32, changed: &dyn Fn(usize) -> bool) -> Vec<Region> {
+    let n = scene.accel.instances().len();
+    scene
+        .instance_world_bounds_each(n, changed)
+        .into_iter()
+        .enumerate()
+        .filter_map(|(i, b)| {
+            b.map(|bounds| Region {
+                instance: i as u32,
+                frame,
+                bounds,
+            })
+        })
+        .collect()
 }
 
 /// Exact (bitwise) equality of evaluated values.

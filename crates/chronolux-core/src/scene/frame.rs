@@ -96,6 +96,67 @@ pub struct FrameScene {
 }
 
 impl FrameScene {
+    /// World transform of every geometry's vertex data (identity for world-space data),
+    /// from the instance that carries it ([`FrameScene::geometry_instance`]).
+    pub fn geometry_transforms(&self) -> Vec<Affine3A> {
+        let inst = self.accel.instances();
+        self.geometry
+            .iter()
+            .zip(&self.geometry_instance)
+            .map(|(g, &i)| {
+                if g.world_space {
+                    Affine3A::IDENTITY
+                } else {
+                    inst[i as usize].world_from_object
+                }
+            })
+            .collect()
+    }
+
+    /// World bounds of every instance `i < n` that `select(i)` picks, from its vertices,
+    /// slightly padded (1e-4 of the diagonal, at least 1e-7) so that surfaces on a box
+    /// face count as inside; in instance order. Instances with no geometry give no box.
+    pub fn instance_world_bounds(&self, n: usize, select: impl Fn(usize) -> bool) -> Vec<Bounds3> {
+        self.instance_world_bounds_each(n, select)
+            .into_iter()
+            .flatten()
+            .collect()
+    }
+
+    /// [`FrameScene::instance_world_bounds`] indexed by instance (`None`: not picked, or
+    /// no vertices).
+    pub fn instance_world_bounds_each(
+        &self,
+        n: usize,
+        select: impl Fn(usize) -> bool,
+    ) -> Vec<Option<Bounds3>> {
+        let xf = self.geometry_transforms();
+        let mut boxes: Vec<Option<Bounds3>> = vec![None; n];
+        for (g, geo) in self.geometry.iter().enumerate() {
+            let i = self.geometry_instance[g] as usize;
+            if i >= n || !select(i) {
+                continue;
+            }
+            for p in geo.positions.iter() {
+                let q = xf[g].transform_point3(*p);
+                let b = Bounds3 { min: q, max: q };
+                boxes[i] = Some(boxes[i].map_or(b, |o| o.union(&b)));
+            }
+        }
+        boxes
+            .into_iter()
+            .map(|b| {
+                b.map(|b| {
+                    let pad = 1e-4 * (b.max - b.min).length().max(1e-3);
+                    Bounds3 {
+                        min: b.min - Vec3::splat(pad),
+                        max: b.max + Vec3::splat(pad),
+                    }
+                })
+            })
+            .collect()
+    }
+
     /// Whether a ray may stop at this triangle point (alpha mask / stochastic blend).
     #[inline]
     pub fn accept(&self, tri: TriRef, b1: f32, b2: f32) -> bool {

@@ -115,13 +115,13 @@ impl FrameSource {
     pub fn delta_over(&mut self, frames: &[u32]) -> FrameDelta {
         let mut delta = FrameDelta::default();
         let mut prev: Option<Arc<FrameScene>> = None;
-        for &f in frames {
+        for (k, &f) in frames.iter().enumerate() {
             let s = self.frame(f);
             let d = match &prev {
                 Some(p) => FrameDelta::between(p, &s),
                 None => FrameDelta::between(&s, &s),
             };
-            delta.merge(&d);
+            delta.merge_at(&d, (k as u32).saturating_sub(1));
             prev = Some(s);
         }
         delta

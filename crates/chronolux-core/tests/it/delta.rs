@@ -122,6 +122,73 @@ fn geometry_of(scene: &FrameScene, desc: &SceneDesc, name: &str) -> u32 {
         .unwrap_or_else(|| panic!("no geometry on node {name}")) as u32
 }
 
+/// World positions of the vertices instance `i` carries in `scene`.
+fn instance_points(scene: &FrameScene, i: usize) -> Vec<Vec3> {
+    let xf = scene.geometry_transforms();
+    scene
+        .geometry
+        .iter()
+        .enumerate()
+        .filter(|(g, _)| scene.geometry_instance[*g] as usize == i)
+        .flat_map(|(g, gd)| {
+            let m = xf[g];
+            gd.positions.iter().map(move |p| m.transform_point3(*p))
+        })
+        .collect::<Vec<_>>()
+}
+
+fn inside(b: &chronolux_core::geometry::Bounds3, p: Vec3) -> bool {
+    p.cmpge(b.min).all() && p.cmple(b.max).all()
+}
+
+/// `d = between(a, b)` has one region per changed instance (that carries vertices) in
+/// each frame, containing every vertex it has there (brute force over the vertices),
+/// within a padding of 1e-4 of its diagonal (FrameScene::instance_world_bounds' pad,
+/// at least 1e-7), and none for an unchanged instance.
+fn regions_bound_exactly_the_changed_instances(d: &FrameDelta, a: &FrameScene, b: &FrameScene) {
+    for (k, scene) in [a, b].into_iter().enumerate() {
+        let mut expect = Vec::new();
+        for i in 0..scene.accel.instances().len() {
+            let pts = instance_points(scene, i);
+            if !d.instance_changed(i) || pts.is_empty() {
+                continue;
+            }
+            expect.push(i as u32);
+            let r = d
+                .regions()
+                .iter()
+                .find(|r| r.frame == k as u32 && r.instance == i as u32)
+                .unwrap_or_else(|| panic!("no region of instance {i} in frame {k}"));
+            assert!(
+                pts.iter().all(|&p| inside(&r.bounds, p)),
+                "instance {i} frame {k}"
+            );
+            let (lo, hi) = pts
+                .iter()
+                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, h), &p| {
+                    (l.min(p), h.max(p))
+                });
+            let pad = 1e-4 * (hi - lo).length().max(1e-3) * 1.001;
+            assert!(
+                (r.bounds.min - lo).abs().max_element() <= pad
+                    && (r.bounds.max - hi).abs().max_element() <= pad,
+                "instance {i} frame {k}: {:?} vs {lo}..{hi}",
+                r.bounds
+            );
+        }
+        let got: Vec<u32> = d
+            .regions()
+            .iter()
+            .filter(|r| r.frame == k as u32)
+            .map(|r| r.instance)
+            .collect();
+        assert_eq!(
+            got, expect,
+            "frame {k}: one region per changed instance, in order"
+        );
+    }
+}
+
 fn changed_instances(d: &FrameDelta) -> Vec<usize> {
     (0..d.instance_count())
         .filter(|&i| d.instance_changed(i))
@@ -161,7 +228,12 @@ fn demo_cube_moves_walls_and_camera_stay() {
     assert!(!d.camera_changed(), "the demo's camera is static");
     assert!(!d.lights_changed() && !d.materials_changed());
     assert!(!d.is_static());
-    assert_eq!(d, FrameDelta::between(&fr[1], &fr[0]), "symmetric");
+    // Symmetric in what changed; the regions name the frames in the order given.
+    let back = FrameDelta::between(&fr[1], &fr[0]);
+    assert_eq!(changed_instances(&back), changed_instances(&d), "symmetric");
+    assert_eq!(back.changed_bounds_in(0), d.changed_bounds_in(1));
+    assert_eq!(back.changed_bounds_in(1), d.changed_bounds_in(0));
+    regions_bound_exactly_the_changed_instances(&d, &fr[0], &fr[1]);
     // Geometry-level view: every primitive of the cube changed, nothing else did.
     for (g, gd) in fr[0].geometry.iter().enumerate() {
         let is_cube = desc.nodes[gd.node.index()].name == "sliding_cube";
@@ -189,6 +261,7 @@ fn skinned_and_morphed_meshes_are_deformed_not_moved() {
     }
     assert!(!d.instance_changed(still));
     assert!(!d.instance_changed(instance_of(&fr[0], &desc, "ceiling_light")));
+    regions_bound_exactly_the_changed_instances(&d, &fr[0], &fr[1]);
     assert!(!d.camera_changed() && !d.lights_changed() && !d.materials_changed());
     // The builder rebuilds deformed geometry for every build: at the same time the data
     // is new (other buffers, other BLAS) but equal, so nothing is deformed.
@@ -293,6 +366,29 @@ fn segment_dynamic_set_is_the_union_of_pairwise_changes() {
             assert_eq!(a.world_from_object, b.world_from_object, "{what}");
             assert!(!seg_delta.instance_changed(i));
         }
+        // Where: every vertex a dynamic instance has in any frame of the segment lies in
+        // one of its regions; each region names a frame of the segment.
+        for (f, scene) in fr.iter().enumerate() {
+            for (i, _) in seg.iter().enumerate().filter(|(_, c)| **c) {
+                let mine: Vec<_> = seg_delta
+                    .regions()
+                    .iter()
+                    .filter(|r| r.instance == i as u32)
+                    .collect();
+                for p in instance_points(scene, i) {
+                    assert!(
+                        mine.iter().any(|r| inside(&r.bounds, p)),
+                        "{what}: instance {i}, frame {f}: {p} outside its regions"
+                    );
+                }
+            }
+        }
+        assert!(
+            seg_delta
+                .regions()
+                .iter()
+                .all(|r| (r.frame as usize) < fr.len())
+        );
         // Through the frame source (built two at a time).
         let mut src = FrameSource::new(builder(desc), FPS, fs.clone());
         assert_eq!(src.delta_over(&fs), seg_delta, "{what}");

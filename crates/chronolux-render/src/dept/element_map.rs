@@ -49,8 +49,7 @@
 use crate::kernels::photon::{MAX_BOUNCES, PhotonHit, PhotonStats, trace_photons_within};
 use chronolux_core::accel::TriRef;
 use chronolux_core::color::{Rgb, luminance};
-use chronolux_core::geometry::Bounds3;
-use chronolux_core::math::{Affine3A, Vec3};
+use chronolux_core::math::Vec3;
 use chronolux_core::scene::frame::FrameScene;
 use std::collections::HashMap;
 
@@ -141,58 +140,6 @@ pub fn subdivision_length(p: [Vec3; 3]) -> f32 {
     longest.min((8.0 * area).sqrt().max(0.25 * longest))
 }
 
-/// World transform of every geometry's vertex data (identity for world-space data), from
-/// the instance that carries it ([`FrameScene::geometry_instance`]).
-pub fn geometry_transforms(scene: &FrameScene) -> Vec<Affine3A> {
-    let inst = scene.accel.instances();
-    scene
-        .geometry
-        .iter()
-        .zip(&scene.geometry_instance)
-        .map(|(g, &i)| {
-            if g.world_space {
-                Affine3A::IDENTITY
-            } else {
-                inst[i as usize].world_from_object
-            }
-        })
-        .collect()
-}
-
-/// World bounds, in `scene`, of every instance `i < n` that `select(i)` picks, slightly
-/// padded (1e-4 of the diagonal, at least 1e-7) so that surfaces on a box face count as
-/// inside. Instances with no geometry give no box.
-pub fn instance_world_bounds(
-    scene: &FrameScene,
-    n: usize,
-    select: impl Fn(usize) -> bool,
-) -> Vec<Bounds3> {
-    let xf = geometry_transforms(scene);
-    let mut boxes: Vec<Option<Bounds3>> = vec![None; n];
-    for (g, geo) in scene.geometry.iter().enumerate() {
-        let i = scene.geometry_instance[g] as usize;
-        if i >= n || !select(i) {
-            continue;
-        }
-        for p in geo.positions.iter() {
-            let q = xf[g].transform_point3(*p);
-            let b = Bounds3 { min: q, max: q };
-            boxes[i] = Some(boxes[i].map_or(b, |o| o.union(&b)));
-        }
-    }
-    boxes
-        .into_iter()
-        .flatten()
-        .map(|b| {
-            let pad = 1e-4 * (b.max - b.min).length().max(1e-3);
-            Bounds3 {
-                min: b.min - Vec3::splat(pad),
-                max: b.max + Vec3::splat(pad),
-            }
-        })
-        .collect()
-}
-
 /// Where a surface point falls on the element mesh.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Located {
@@ -269,7 +216,7 @@ impl ElementMesh {
         } else {
             1.0
         };
-        let xf = geometry_transforms(scene);
+        let xf = scene.geometry_transforms();
         let mut m = ElementMesh {
             element_size: h,
             geom_tri: vec![0],
@@ -677,7 +624,7 @@ pub struct FrameElements {
 
 impl FrameElements {
     pub fn new(scene: &FrameScene, mesh: &ElementMesh) -> Self {
-        let xf = geometry_transforms(scene);
+        let xf = scene.geometry_transforms();
         let n = mesh.element_count();
         let mut f = FrameElements {
             area: vec![0.0; n],

@@ -239,14 +239,8 @@ impl Validity {
         if d.is_static() {
             return Validity::All;
         }
-        let mut changed = Vec::new();
-        for scene in [past, current] {
-            changed.extend(
-                crate::spt::pool::changed_instance_bounds(scene, &d)
-                    .iter()
-                    .filter_map(ball),
-            );
-        }
+        // Past frame's bounds, then current's: the delta's regions.
+        let changed = d.changed_bounds().iter().filter_map(ball).collect();
         Validity::Clear {
             changed,
             lights: light_reach(current),

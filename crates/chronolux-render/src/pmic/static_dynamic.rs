@@ -323,7 +323,7 @@ fn trace_list(
 
 /// World bounds of the instances `dynamic` marks, in `scene` (slightly padded).
 pub fn dynamic_bounds(scene: &FrameScene, dynamic: &[bool]) -> Vec<Bounds3> {
-    crate::dept::element_map::instance_world_bounds(scene, dynamic.len(), |i| dynamic[i])
+    scene.instance_world_bounds(dynamic.len(), |i| dynamic[i])
 }
 
 /// The photons of a frame that must be re-traced: those (of the segment's candidates)

@@ -184,13 +184,6 @@ pub fn segment_hits_box(o: Vec3, d: Vec3, t_max: f32, b: &Bounds3) -> bool {
     true
 }
 
-/// World bounds, in `scene`, of every instance `changed` says changed (slightly padded).
-pub fn changed_instance_bounds(scene: &FrameScene, changes: &FrameDelta) -> Vec<Bounds3> {
-    crate::dept::element_map::instance_world_bounds(scene, scene.accel.instances().len(), |i| {
-        changes.instance_changed(i)
-    })
-}
-
 /// Traces photons `indices` in parallel; records in the order of `indices`.
 pub fn trace_records(
     scene: &FrameScene,
@@ -596,7 +589,8 @@ impl SptState {
                 // Every stored path that touched a change, or whose segments cross the
                 // new bounds of a changed instance, is (possibly) stale: its group goes
                 // into the queue too, with the change its removal makes as its weight.
-                let boxes = changed_instance_bounds(&self.scene, changes);
+                // `changes` is from the pool's previous scene to `self.scene` (frame 1).
+                let boxes = changes.changed_bounds_in(1);
                 let z = self.records.len();
                 // Pilots are current already (traced above).
                 let first_non_pilot = (self.pilots * groups) as usize;

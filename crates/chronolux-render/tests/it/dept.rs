@@ -638,8 +638,8 @@ fn geometry_instance_carries_the_moving_node() {
     let mut b = FrameBuilder::new(desc, Some(AnimationId(0)), CameraChoice::First, 8, 8).unwrap();
     let (s0, s1) = (b.build(0.0), b.build(1.0));
     assert_eq!(s0.geometry_instance.len(), s0.geometry.len());
-    let xf0 = chronolux_render::dept::element_map::geometry_transforms(&s0);
-    let xf1 = chronolux_render::dept::element_map::geometry_transforms(&s1);
+    let xf0 = s0.geometry_transforms();
+    let xf1 = s1.geometry_transforms();
     let moved: Vec<f32> = xf0
         .iter()
         .zip(&xf1)

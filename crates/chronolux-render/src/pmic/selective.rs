@@ -170,6 +170,193 @@ impl State {
     }
 }
 
+/// Step 1 of a frame: what changed since the previous frame rendered, and where.
+struct Change {
+    /// Per instance: moved or deformed.
+    changed: Vec<bool>,
+    /// Lights or materials changed and `recast_on_light_change`: every stratum is stale.
+    all_stale: bool,
+    /// World boxes (previous and this frame) of the changed instances, slightly enlarged.
+    boxes: Vec<Bounds3>,
+}
+
+/// The phases of [`IcSelective::render`] that update the kept records (the module doc's
+/// steps 1 to 5), in order.
+impl State {
+    fn change_to(&self, scene: &FrameScene, recast_on_light_change: bool) -> Change {
+        let delta = FrameDelta::between(&self.prev, scene);
+        let changed = delta.dynamic_instances();
+        let all_stale =
+            recast_on_light_change && (delta.lights_changed() || delta.materials_changed());
+        let eps = scene.scene_radius.max(1e-6) * 1e-4;
+        let mut boxes = Vec::new();
+        for (i, _) in changed.iter().enumerate().filter(|(_, c)| **c) {
+            for sc in [&*self.prev, scene] {
+                let mut b = instance_box(sc, i);
+                if !b.is_empty() {
+                    b.min -= Vec3::splat(eps);
+                    b.max += Vec3::splat(eps);
+                    boxes.push(b);
+                }
+            }
+        }
+        Change {
+            changed,
+            all_stale,
+            boxes,
+        }
+    }
+
+    /// Step 2: takes the records, frees the slots of those on a changed surface and
+    /// returns the others.
+    fn drop_changed(&mut self, changed: &[bool]) -> Vec<SelRecord> {
+        let mut kept = Vec::with_capacity(self.records.len());
+        for r in std::mem::take(&mut self.records) {
+            if changed.get(r.instance as usize).copied().unwrap_or(true) {
+                self.free.insert(r.slot);
+            } else {
+                kept.push(r);
+            }
+        }
+        kept
+    }
+
+    /// Step 3: of `kept`, the records valid at one of this frame's probe `points` (the
+    /// others' slots are freed).
+    fn keep_used(
+        &mut self,
+        kept: Vec<SelRecord>,
+        points: &[(u64, CacheQuery)],
+        scene: &FrameScene,
+        s: &PmIcSettings,
+    ) -> Vec<SelRecord> {
+        let mut used = vec![false; kept.len()];
+        let mut old = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
+        for r in &kept {
+            old.insert(r.record);
+        }
+        let hits = parallel::map_chunks(points.len(), 256, |range| {
+            let mut ids = Vec::new();
+            for (_, q) in &points[range] {
+                old.for_valid_indexed(q.p, q.n, |id, _, _| ids.push(id as u32));
+            }
+            ids
+        });
+        for id in hits.into_iter().flatten() {
+            used[id as usize] = true;
+        }
+        let mut records = Vec::with_capacity(kept.len());
+        for (r, u) in kept.into_iter().zip(used) {
+            if u {
+                records.push(r);
+            } else {
+                self.free.insert(r.slot);
+            }
+        }
+        records
+    }
+
+    /// Step 4: refreshes every record's strata (read from the store in chunks of
+    /// [`CHUNK`] records, refreshed in parallel, written back); the strata counts and the
+    /// seconds spent in the store.
+    fn refresh(
+        &mut self,
+        records: &mut [SelRecord],
+        refresh: &Refresh,
+        spr: usize,
+    ) -> (Counts, f64) {
+        let mut counts = Counts::default();
+        let mut t_store = 0.0f64;
+        for start in (0..records.len()).step_by(CHUNK) {
+            let end = (start + CHUNK).min(records.len());
+            let ts = Instant::now();
+            let blocks: Vec<Vec<Stratum>> = records[start..end]
+                .iter()
+                .map(|r| {
+                    let mut b = vec![Stratum::EMPTY; spr];
+                    self.store.read(r.slot, &mut b);
+                    b
+                })
+                .collect();
+            t_store += ts.elapsed().as_secs_f64();
+            let done = parallel::map_chunks(blocks.len(), 1, |range| {
+                let i = range.start;
+                let mut b = blocks[i].clone();
+                let (rec, c) = refresh.record(&records[start + i], &mut b);
+                (b, rec, c)
+            });
+            let ts = Instant::now();
+            for (i, (b, rec, c)) in done.into_iter().enumerate() {
+                let r = &mut records[start + i];
+                self.store.write(r.slot, &b);
+                r.record = rec;
+                counts.priority += c.priority;
+                counts.aged += c.aged;
+            }
+            t_store += ts.elapsed().as_secs_f64();
+        }
+        (counts, t_store)
+    }
+
+    /// Step 5: new records at the probe points no record covers (pm-ic's batches of
+    /// [`BATCH`]), every stratum cast in this frame; the cache of all records, the number
+    /// added and the seconds spent in the store.
+    fn add_needed(
+        &mut self,
+        records: &mut Vec<SelRecord>,
+        points: &[(u64, CacheQuery)],
+        at: &Refresh,
+        spr: usize,
+    ) -> (IrradianceCache, u64, f64) {
+        let (scene, s, frame) = (at.scene, at.s, at.frame);
+        let mut t_store = 0.0f64;
+        let mut cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
+        for r in records.iter() {
+            cache.insert(r.record);
+        }
+        let mut added = 0u64;
+        for batch in points.chunks(BATCH) {
+            let need: Vec<&(u64, CacheQuery)> = batch
+                .iter()
+                .filter(|(_, q)| !cache.covers(q.p, q.n))
+                .collect();
+            if need.is_empty() {
+                continue;
+            }
+            let first_id = self.next_id;
+            self.next_id += need.len() as u64;
+            let made = parallel::map_chunks(need.len(), 1, |r| {
+                let (_, q) = need[r.start];
+                let id = first_id + r.start as u64;
+                let strata: Vec<Stratum> = (0..spr)
+                    .map(|i| cast_stratum(scene, s, at.global, q.p, q.n, id, i, frame))
+                    .collect();
+                let g = gather_of(s, id, q.n, &strata);
+                let rec = record_from(&s.cache, q.p, q.n, q.footprint, &g);
+                (id, *q, strata, rec)
+            });
+            for (id, q, strata, rec) in made {
+                let slot = self.alloc();
+                let ts = Instant::now();
+                self.store.write(slot, &strata);
+                t_store += ts.elapsed().as_secs_f64();
+                cache.insert(rec);
+                records.push(SelRecord {
+                    id,
+                    slot,
+                    p: q.p,
+                    n: q.n,
+                    instance: q.instance,
+                    footprint: q.footprint,
+                    record: rec,
+                });
+                added += 1;
+            }
+        }
+        (cache, added, t_store)
+    }
+}
+
 /// The technique.
 pub struct IcSelective {
     pub settings: IcSelectiveSettings,
@@ -492,157 +679,38 @@ impl IcSelective {
             });
         }
         let st = self.state.as_mut().expect("state made");
-        let delta = FrameDelta::between(&st.prev, scene);
-        let changed = delta.dynamic_instances();
-        let all_stale = self.settings.recast_on_light_change
-            && (delta.lights_changed() || delta.materials_changed());
-        let eps = scene.scene_radius.max(1e-6) * 1e-4;
-        let mut boxes = Vec::new();
-        for (i, _) in changed.iter().enumerate().filter(|(_, c)| **c) {
-            for sc in [&*st.prev, scene] {
-                let mut b = instance_box(sc, i);
-                if !b.is_empty() {
-                    b.min -= Vec3::splat(eps);
-                    b.max += Vec3::splat(eps);
-                    boxes.push(b);
-                }
-            }
-        }
-
+        // 1. What changed since the previous frame rendered, and where.
+        let change = st.change_to(scene, self.settings.recast_on_light_change);
         let maps = frame_maps(scene, &s, photon_base(&s, frame));
         let t_photons = t0.elapsed().as_secs_f64();
-        let mut t_store = 0.0f64;
-
-        // 2. Records on a changed surface are rebuilt (dropped here, made anew below).
         let before = st.records.len();
-        let mut kept = Vec::with_capacity(before);
-        for r in std::mem::take(&mut st.records) {
-            if changed.get(r.instance as usize).copied().unwrap_or(true) {
-                st.free.insert(r.slot);
-            } else {
-                kept.push(r);
-            }
-        }
+        // 2. Records on a changed surface are rebuilt (dropped here, made anew below).
+        let kept = st.drop_changed(&change.changed);
         let rebuilt = before - kept.len();
-
         // 3. Records in use: valid at a probe point of this frame.
         let key = hash_words(&[s.common.seed, photon_base(&s, frame), 0x6963]);
         let probe_src = NoIndirect;
         let probe_view = EyeView::new(&s, scene, &maps.caustic, &probe_src);
         let points = probe_points(&probe_view, scene, key);
-        let mut used = vec![false; kept.len()];
-        {
-            let mut old = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
-            for r in &kept {
-                old.insert(r.record);
-            }
-            let hits = parallel::map_chunks(points.len(), 256, |range| {
-                let mut ids = Vec::new();
-                for (_, q) in &points[range] {
-                    old.for_valid_indexed(q.p, q.n, |id, _, _| ids.push(id as u32));
-                }
-                ids
-            });
-            for id in hits.into_iter().flatten() {
-                used[id as usize] = true;
-            }
-        }
-        let mut records = Vec::with_capacity(kept.len());
-        for (r, u) in kept.into_iter().zip(used) {
-            if u {
-                records.push(r);
-            } else {
-                st.free.insert(r.slot);
-            }
-        }
+        let mut records = st.keep_used(kept, &points, scene, &s);
         let unused = before - rebuilt - records.len();
-
         // 4. Refresh.
         let refresh = Refresh {
             scene,
             s: &s,
             global: &maps.global,
             frame,
-            changed: &changed,
-            boxes: &boxes,
-            all_stale,
+            changed: &change.changed,
+            boxes: &change.boxes,
+            all_stale: change.all_stale,
             budget,
         };
-        let mut counts = Counts::default();
-        for start in (0..records.len()).step_by(CHUNK) {
-            let end = (start + CHUNK).min(records.len());
-            let ts = Instant::now();
-            let blocks: Vec<Vec<Stratum>> = records[start..end]
-                .iter()
-                .map(|r| {
-                    let mut b = vec![Stratum::EMPTY; spr];
-                    st.store.read(r.slot, &mut b);
-                    b
-                })
-                .collect();
-            t_store += ts.elapsed().as_secs_f64();
-            let done = parallel::map_chunks(blocks.len(), 1, |range| {
-                let i = range.start;
-                let mut b = blocks[i].clone();
-                let (rec, c) = refresh.record(&records[start + i], &mut b);
-                (b, rec, c)
-            });
-            let ts = Instant::now();
-            for (i, (b, rec, c)) in done.into_iter().enumerate() {
-                let r = &mut records[start + i];
-                st.store.write(r.slot, &b);
-                r.record = rec;
-                counts.priority += c.priority;
-                counts.aged += c.aged;
-            }
-            t_store += ts.elapsed().as_secs_f64();
-        }
+        let (counts, mut t_store) = st.refresh(&mut records, &refresh, spr);
         let refreshed = records.len();
-
         // 5. New records where the view needs them (pm-ic's batches).
-        let mut cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
-        for r in &records {
-            cache.insert(r.record);
-        }
-        let mut added = 0u64;
-        for batch in points.chunks(BATCH) {
-            let need: Vec<&(u64, CacheQuery)> = batch
-                .iter()
-                .filter(|(_, q)| !cache.covers(q.p, q.n))
-                .collect();
-            if need.is_empty() {
-                continue;
-            }
-            let first_id = st.next_id;
-            st.next_id += need.len() as u64;
-            let made = parallel::map_chunks(need.len(), 1, |r| {
-                let (_, q) = need[r.start];
-                let id = first_id + r.start as u64;
-                let strata: Vec<Stratum> = (0..spr)
-                    .map(|i| cast_stratum(scene, &s, &maps.global, q.p, q.n, id, i, frame))
-                    .collect();
-                let g = gather_of(&s, id, q.n, &strata);
-                let rec = record_from(&s.cache, q.p, q.n, q.footprint, &g);
-                (id, *q, strata, rec)
-            });
-            for (id, q, strata, rec) in made {
-                let slot = st.alloc();
-                let ts = Instant::now();
-                st.store.write(slot, &strata);
-                t_store += ts.elapsed().as_secs_f64();
-                cache.insert(rec);
-                records.push(SelRecord {
-                    id,
-                    slot,
-                    p: q.p,
-                    n: q.n,
-                    instance: q.instance,
-                    footprint: q.footprint,
-                    record: rec,
-                });
-                added += 1;
-            }
-        }
+        let (cache, added, t_add) = st.add_needed(&mut records, &points, &refresh, spr);
+        t_store += t_add;
+        let all_stale = change.all_stale;
         st.records = records;
         st.prev = scene_arc.clone();
         let t_cache = t0.elapsed().as_secs_f64() - t_photons;

@@ -760,29 +760,11 @@ impl SpacetimeDept {
         }
         self.mesh = Some(mesh);
     }
-}
 
-impl SequenceRenderer for SpacetimeDept {
-    fn name(&self) -> &'static str {
-        "spacetime-dept"
-    }
-
-    /// Direct light per pixel, indirect from the pooled elements (the DEPT view).
-    fn separates_light(&self) -> bool {
-        true
-    }
-
-    fn render_frame(
-        &mut self,
-        source: &mut FrameSource,
-        frame: u32,
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> RenderedFrame {
-        let s = self.settings.clone();
-        // The output frame's scene stays cached while the look-ahead builds K more.
-        source.reserve(s.window as usize + 2);
-        let scene_arc = source.frame(frame);
-        let scene = &*scene_arc;
+    /// The element mesh for `scene` (built again where its topology changed) and a
+    /// restart where the frames jump back.
+    fn start_frame(&mut self, source: &mut FrameSource, frame: u32, scene: &FrameScene) {
+        let s = &self.settings;
         if !self.mesh.as_ref().is_some_and(|m| m.matches(scene)) {
             // From frame 0's scene whatever frame the run starts at: the element size
             // follows the scene's bounds, which the animation can change, so a farm
@@ -812,6 +794,114 @@ impl SequenceRenderer for SpacetimeDept {
             self.probe = None;
         }
         self.last_output = Some(frame);
+    }
+
+    /// The output frame's element irradiance (indirect, caustic; per element side) pooled
+    /// over its windows, with the windows; shoots more photons into traced frame `c`
+    /// while the `auto` stopping rule asks for them.
+    fn solve_elements(
+        &mut self,
+        scene: &FrameScene,
+        frame: u32,
+        mesh: &ElementMesh,
+        fe: &FrameElements,
+        c: usize,
+        nb: &Neighbours,
+    ) -> (Vec<Rgb>, Vec<Rgb>, Vec<(u32, u32)>) {
+        let s = self.settings.clone();
+        loop {
+            let (pi, pc, window) = self.pool(c);
+            let cur = &self.frames[c].photons;
+            let prior_i = prior_sq(&cur.indirect);
+            let prior_c = prior_sq(&cur.caustic);
+            let (ind, si) = self.complete(&pi, nb, prior_i);
+            let (cau, sc) = self.complete(&pc, nb, prior_c);
+            let Some(rule) = s.auto else {
+                break (ind, cau, window);
+            };
+            let total = cur.photons();
+            let a = assess_frame(&rule, mesh, fe, cur, &ind, &cau, &si, &sc);
+            log::debug!(
+                "spacetime-dept frame {frame}: {total} photons, {:.1} % of the power-weighted surface above the {} contrast threshold, {} photons predicted",
+                100.0 * a.fraction_above,
+                rule.weber,
+                a.predicted_photons
+            );
+            match next_total(&rule, total, &a) {
+                Some(t) => {
+                    let base = frame as u64 * rule.max_photons.max(1);
+                    let tr = &mut self.frames[c];
+                    deposit_more_photons(
+                        scene,
+                        mesh,
+                        base + total..base + t,
+                        s.common.seed,
+                        max_photon_bounces(s.common.max_depth),
+                        &mut tr.photons,
+                    );
+                    let (rc, rd) = Traced::radii(mesh, s.change_radius);
+                    tr.analyse(fe, &Neighbours::new(fe, rc), &Neighbours::new(fe, rd));
+                }
+                None => break (ind, cau, window),
+            }
+        }
+    }
+}
+
+/// Debug log of a frame's windows: the power-weighted mean window length and the
+/// fraction of the power whose window is whole.
+fn log_windows(
+    source: &mut FrameSource,
+    frame: u32,
+    k: u32,
+    fe: &FrameElements,
+    ind: &[Rgb],
+    cau: &[Rgb],
+    window: &[(u32, u32)],
+) {
+    // Power-weighted mean window length and fraction of whole windows.
+    let whole = source.window(frame, k, k);
+    let whole = (whole[0], *whole.last().expect("frame in its window"));
+    let (mut w, mut len, mut full) = (0.0f64, 0.0f64, 0.0f64);
+    for (slot, win) in window.iter().enumerate() {
+        let p = (fe.area[slot / 2] * luminance(ind[slot] + cau[slot])) as f64;
+        if p > 0.0 {
+            w += p;
+            len += p * (win.1 - win.0 + 1) as f64;
+            full += p * (*win == whole) as u8 as f64;
+        }
+    }
+    log::debug!(
+        "spacetime-dept frame {frame}: power-weighted mean window {:.2} frames, {:.1} % of the power with the whole window {}..={}",
+        len / w.max(1e-30),
+        100.0 * full / w.max(1e-30),
+        whole.0,
+        whole.1
+    );
+}
+
+impl SequenceRenderer for SpacetimeDept {
+    fn name(&self) -> &'static str {
+        "spacetime-dept"
+    }
+
+    /// Direct light per pixel, indirect from the pooled elements (the DEPT view).
+    fn separates_light(&self) -> bool {
+        true
+    }
+
+    fn render_frame(
+        &mut self,
+        source: &mut FrameSource,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        let s = self.settings.clone();
+        // The output frame's scene stays cached while the look-ahead builds K more.
+        source.reserve(s.window as usize + 2);
+        let scene_arc = source.frame(frame);
+        let scene = &*scene_arc;
+        self.start_frame(source, frame, scene);
         let probed = match self.as_path(source, frame, &scene_arc, progress) {
             Ok(img) => return img,
             Err(probed) => probed,
@@ -831,63 +921,10 @@ impl SequenceRenderer for SpacetimeDept {
         let t0 = std::time::Instant::now();
         let mut nb_output = std::mem::take(&mut self.nb_output);
         let nb = nb_output.get(&fe, self.output_radius(&mesh));
-        let (ind, cau, window) = loop {
-            let (pi, pc, window) = self.pool(c);
-            let cur = &self.frames[c].photons;
-            let prior_i = prior_sq(&cur.indirect);
-            let prior_c = prior_sq(&cur.caustic);
-            let (ind, si) = self.complete(&pi, nb, prior_i);
-            let (cau, sc) = self.complete(&pc, nb, prior_c);
-            let Some(rule) = s.auto else {
-                break (ind, cau, window);
-            };
-            let total = cur.photons();
-            let a = assess_frame(&rule, &mesh, &fe, cur, &ind, &cau, &si, &sc);
-            log::debug!(
-                "spacetime-dept frame {frame}: {total} photons, {:.1} % of the power-weighted surface above the {} contrast threshold, {} photons predicted",
-                100.0 * a.fraction_above,
-                rule.weber,
-                a.predicted_photons
-            );
-            match next_total(&rule, total, &a) {
-                Some(t) => {
-                    let base = frame as u64 * rule.max_photons.max(1);
-                    let tr = &mut self.frames[c];
-                    deposit_more_photons(
-                        scene,
-                        &mesh,
-                        base + total..base + t,
-                        s.common.seed,
-                        max_photon_bounces(s.common.max_depth),
-                        &mut tr.photons,
-                    );
-                    let (rc, rd) = Traced::radii(&mesh, s.change_radius);
-                    tr.analyse(&fe, &Neighbours::new(&fe, rc), &Neighbours::new(&fe, rd));
-                }
-                None => break (ind, cau, window),
-            }
-        };
+        let (ind, cau, window) = self.solve_elements(scene, frame, &mesh, &fe, c, nb);
         self.nb_output = nb_output;
         if log::log_enabled!(log::Level::Debug) {
-            // Power-weighted mean window length and fraction of whole windows.
-            let whole = source.window(frame, s.window, s.window);
-            let whole = (whole[0], *whole.last().expect("frame in its window"));
-            let (mut w, mut len, mut full) = (0.0f64, 0.0f64, 0.0f64);
-            for (slot, win) in window.iter().enumerate() {
-                let p = (fe.area[slot / 2] * luminance(ind[slot] + cau[slot])) as f64;
-                if p > 0.0 {
-                    w += p;
-                    len += p * (win.1 - win.0 + 1) as f64;
-                    full += p * (*win == whole) as u8 as f64;
-                }
-            }
-            log::debug!(
-                "spacetime-dept frame {frame}: power-weighted mean window {:.2} frames, {:.1} % of the power with the whole window {}..={}",
-                len / w.max(1e-30),
-                100.0 * full / w.max(1e-30),
-                whole.0,
-                whole.1
-            );
+            log_windows(source, frame, s.window, &fe, &ind, &cau, &window);
         }
         let cur = &self.frames[c];
         self.last_photons = Some(cur.photons.photons());

@@ -107,7 +107,7 @@ pub struct SpacetimeSettings {
     /// Camera samples, path depth and seed ([`crate::registry::CommonSettings`]). `spp`:
     /// Camera samples per pixel of each frame. Default 16. `max_depth`: Longest path in
     /// segments from the camera (`--max-depth`, Mitsuba's `max_depth`), as `dept`'s
-    /// ([`crate::dept::DeptSettings::max_depth`]). `None` (default): unlimited. `seed`:
+    /// ([`crate::dept::DeptSettings::common`]). `None` (default): unlimited. `seed`:
     /// Seed of the photon and camera streams. Default 0.
     #[serde(flatten)]
     pub common: crate::registry::CommonSettings,

@@ -259,5 +259,11 @@ pub static TECHNIQUE: crate::registry::Preset<PathSettings> = crate::registry::P
     ],
     defaults: PathSettings::default,
     common: |s| &mut s.common,
-    build: |s, ctx, name| crate::motion_blur::frame_by_frame(PathTracer::new(s), ctx.shutter, name),
+    build: |s, ctx, name| {
+        Ok(crate::motion_blur::frame_by_frame(
+            PathTracer::new(s),
+            ctx.shutter,
+            name,
+        ))
+    },
 };

@@ -165,8 +165,10 @@ pub struct Preset<S> {
     /// Where its [`CommonSettings`] are (`|s| &mut s.common`; `|s| &mut s.bdpt.common`
     /// for a technique that embeds another's settings).
     pub common: fn(&mut S) -> &mut CommonSettings,
-    /// Builds the technique; the name is the preset's (for reports).
-    pub build: fn(S, &BuildContext, &'static str) -> Renderer,
+    /// Builds the technique; the name is the preset's (for reports). An error: settings
+    /// that pass the settings type but cannot be built (e.g. an unwritable store folder),
+    /// said before any frame renders.
+    pub build: fn(S, &BuildContext, &'static str) -> Result<Renderer, String>,
 }
 
 impl<S> Preset<S>
@@ -241,7 +243,8 @@ where
             ));
         }
         crate::motion_blur::check_shutter(ctx.shutter)?;
-        Ok((self.build)(self.parse(settings)?, ctx, self.name))
+        (self.build)(self.parse(settings)?, ctx, self.name)
+            .map_err(|e| format!("--method {}: {e}", self.name))
     }
 }
 

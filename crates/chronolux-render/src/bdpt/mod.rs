@@ -505,5 +505,11 @@ pub static TECHNIQUE: crate::registry::Preset<BdptSettings> = crate::registry::P
     quality: &[],
     defaults: BdptSettings::default,
     common: |s| &mut s.common,
-    build: |s, ctx, name| crate::motion_blur::frame_by_frame(Bdpt::new(s), ctx.shutter, name),
+    build: |s, ctx, name| {
+        Ok(crate::motion_blur::frame_by_frame(
+            Bdpt::new(s),
+            ctx.shutter,
+            name,
+        ))
+    },
 };

@@ -354,8 +354,8 @@ fn build_dept(
     s: DeptSettings,
     _: &crate::registry::BuildContext,
     name: &'static str,
-) -> crate::registry::Renderer {
-    Box::new(DeptSequence::new(Dept::new(s), name))
+) -> Result<crate::registry::Renderer, String> {
+    Ok(Box::new(DeptSequence::new(Dept::new(s), name)))
 }
 
 /// Registry entry of `dept` (no filtering).

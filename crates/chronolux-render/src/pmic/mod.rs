@@ -542,5 +542,5 @@ pub static TECHNIQUE: crate::registry::Preset<PmIcSettings> = crate::registry::P
     quality: &[],
     defaults: PmIcSettings::default,
     common: |s| &mut s.common,
-    build: |s, _, name| Box::new(PmIc { settings: s, name }),
+    build: |s, _, name| Ok(Box::new(PmIc { settings: s, name })),
 };

@@ -357,11 +357,34 @@ impl State {
     }
 }
 
+/// The strata store `s` asks for: in memory, or paged to a file in `store_dir` (the
+/// system's temporary folder when empty).
+fn make_store(s: &IcSelectiveSettings) -> Result<Box<dyn StrataStore>, String> {
+    let spr = (s.pmic.gather_m.max(1) * s.pmic.gather_n.max(1)) as usize;
+    if !s.paged {
+        return Ok(Box::new(MemoryStore::new(spr)));
+    }
+    let dir = (!s.store_dir.is_empty()).then(|| std::path::PathBuf::from(&s.store_dir));
+    let shown = dir.clone().unwrap_or_else(std::env::temp_dir);
+    let store = PagedStore::new(spr, s.page_kb as usize * 1024, s.cache_pages as usize, dir)
+        .map_err(|e| {
+            format!(
+                "cannot create the paged strata file in {} (store_dir): {e}",
+                shown.display()
+            )
+        })?;
+    Ok(Box::new(store))
+}
+
 /// The technique.
 pub struct IcSelective {
     pub settings: IcSelectiveSettings,
     pub name: &'static str,
     state: Option<State>,
+    /// The strata store, made when the technique is built (so that a store folder that
+    /// cannot be written is an error before any frame), moved into the state by the first
+    /// frame.
+    store: Option<Box<dyn StrataStore>>,
 }
 
 /// The numbers of stratum `idx` of record `id` cast in frame `cast`: jitter in the
@@ -612,25 +635,16 @@ impl Refresh<'_> {
 }
 
 impl IcSelective {
-    pub fn new(settings: IcSelectiveSettings, name: &'static str) -> Self {
-        IcSelective {
+    /// The technique with its strata store; an error names the store folder that cannot
+    /// hold the paged store's file.
+    pub fn new(settings: IcSelectiveSettings, name: &'static str) -> Result<Self, String> {
+        let store = Some(make_store(&settings)?);
+        Ok(IcSelective {
             settings,
             name,
             state: None,
-        }
-    }
-
-    fn make_store(&self) -> Box<dyn StrataStore> {
-        let s = &self.settings;
-        let spr = (s.pmic.gather_m.max(1) * s.pmic.gather_n.max(1)) as usize;
-        if !s.paged {
-            return Box::new(MemoryStore::new(spr));
-        }
-        let dir = (!s.store_dir.is_empty()).then(|| std::path::PathBuf::from(&s.store_dir));
-        Box::new(
-            PagedStore::new(spr, s.page_kb as usize * 1024, s.cache_pages as usize, dir)
-                .unwrap_or_else(|e| panic!("ic-selective: cannot create the strata file: {e}")),
-        )
+            store,
+        })
     }
 
     /// The records kept now (after the last frame rendered), in cache order.
@@ -668,7 +682,10 @@ impl IcSelective {
         let spr = (s.gather_m.max(1) * s.gather_n.max(1)) as usize;
         let budget = (self.settings.refresh.clamp(0.0, 1.0) as f64 * spr as f64).ceil() as usize;
         if self.state.is_none() {
-            let store = self.make_store();
+            let store = self
+                .store
+                .take()
+                .expect("the store is made once, with the technique");
             self.state = Some(State {
                 prev: scene_arc.clone(),
                 records: Vec::new(),
@@ -785,5 +802,5 @@ pub static TECHNIQUE: crate::registry::Preset<IcSelectiveSettings> = crate::regi
     quality: &[],
     defaults: IcSelectiveSettings::default,
     common: |s| &mut s.pmic.common,
-    build: |s, _, name| Box::new(IcSelective::new(s, name)),
+    build: |s, _, name| Ok(Box::new(IcSelective::new(s, name)?)),
 };

@@ -985,5 +985,5 @@ pub static TECHNIQUE: crate::registry::Preset<IcStaticDynamicSettings> = crate::
     quality: &[],
     defaults: IcStaticDynamicSettings::default,
     common: |s| &mut s.pmic.common,
-    build: |s, _, name| Box::new(IcStaticDynamic::new(s, name)),
+    build: |s, _, name| Ok(Box::new(IcStaticDynamic::new(s, name))),
 };

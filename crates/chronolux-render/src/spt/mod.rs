@@ -350,5 +350,5 @@ pub static TECHNIQUE: crate::registry::Preset<SptSettings> = crate::registry::Pr
     quality: &[],
     defaults: SptSettings::default,
     common: |s| &mut s.common,
-    build: |s, _, _| Box::new(Spt::new(s)),
+    build: |s, _, _| Ok(Box::new(Spt::new(s))),
 };

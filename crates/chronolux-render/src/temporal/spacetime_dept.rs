@@ -1058,7 +1058,7 @@ pub static TECHNIQUE: crate::registry::Preset<SpacetimeSettings> = crate::regist
     ],
     defaults: SpacetimeSettings::default,
     common: |s| &mut s.common,
-    build: |s, _, _| Box::new(SpacetimeDept::new(s)),
+    build: |s, _, _| Ok(Box::new(SpacetimeDept::new(s))),
 };
 
 #[cfg(test)]

@@ -42,6 +42,7 @@ fn selective(pmic: PmIcSettings, paged: bool) -> IcSelective {
         },
         "ic-selective",
     )
+    .unwrap()
 }
 
 /// The cube of `cornell_moving` going back and forth: x from −0.3 to 0.1 and back every

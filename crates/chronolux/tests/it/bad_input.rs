@@ -226,6 +226,25 @@ fn usage_errors_are_one_line() {
     fails(&run(["info", "a.glb", "b.glb"]), &["b.glb"]);
     fails(&render_demo(&["--threads", "0"]), &["--threads"]);
     fails(&render_demo(&["--max-depth", "0"]), &["--max-depth"]);
+    // A depth limit asked of a method without one: refused, naming those with one.
+    fails(
+        &render_demo(&["--method", "spt", "--max-depth", "3"]),
+        &["--max-depth 3", "spt", "path, bdpt"],
+    );
+    // ic-selective's paged store in a folder that does not exist: said before any frame
+    // (it panicked in the first frame).
+    let missing = temp_dir("no-store").join("absent");
+    fails(
+        &render_demo(&[
+            "--method",
+            "ic-selective",
+            "--set",
+            "paged=true",
+            "--set",
+            &format!("store_dir={}", missing.display()),
+        ]),
+        &["store_dir", "absent"],
+    );
     // --quality: a method without a measured table, an undenoised level not measured.
     fails(
         &render_demo(&["--method", "bdpt", "--quality", "final"]),

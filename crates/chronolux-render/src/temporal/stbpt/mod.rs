@@ -923,6 +923,6 @@ pub static TECHNIQUE: crate::registry::Preset<StbptSettings> = crate::registry::
     common: |s| &mut s.bdpt.common,
     build: |mut s, ctx, _| {
         s.shutter = ctx.shutter;
-        Box::new(Stbpt::new(s))
+        Ok(Box::new(Stbpt::new(s)))
     },
 };

@@ -195,20 +195,24 @@ pub fn technique_settings(
 ) -> Result<Value> {
     let mut s = registry::resolve(tech, base, &[]).map_err(anyhow::Error::msg)?;
     if common != CommonFlags::default() {
-        if let Some(d) = common.max_depth
-            && !tech.capabilities().max_depth
-        {
-            bail!(
-                "--max-depth {d}: a path depth is not implemented for --method {} (it is for: {})",
-                tech.name(),
-                registry::names_where(|c| c.max_depth).join(", ")
-            );
-        }
         let mut c = tech.common(&s).map_err(anyhow::Error::msg)?;
         c.spp = common.spp.unwrap_or(c.spp);
         c.seed = common.seed.unwrap_or(c.seed);
         c.max_depth = common.max_depth.or(c.max_depth);
-        s = tech.with_common(&s, c).map_err(anyhow::Error::msg)?;
+        // The technique refuses what it cannot do (a depth limit where it has none:
+        // `Capabilities::max_depth`); the error names the flags that asked for it.
+        let given = [
+            ("--spp", common.spp.map(u64::from)),
+            ("--seed", common.seed),
+            ("--max-depth", common.max_depth.map(u64::from)),
+        ]
+        .into_iter()
+        .filter_map(|(f, v)| v.map(|v| format!("{f} {v}")))
+        .collect::<Vec<_>>()
+        .join(" ");
+        s = tech
+            .with_common(&s, c)
+            .map_err(|e| anyhow::anyhow!("{given}: {e}"))?;
     }
     for f in flags {
         if registry::find_key(&s, f.key).is_none() {

@@ -193,7 +193,6 @@ impl FrameDelta {
         for (k, w) in frames.windows(2).enumerate() {
             d.merge_at(&FrameDelta::between(w[0], w[1]), k as u32);
         }
-
         if d.moved.is_empty()
             && let Some(f) = frames.first()
         {

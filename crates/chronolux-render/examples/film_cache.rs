@@ -20,7 +20,7 @@
 
 use chronolux_core::color::Rgb;
 use chronolux_core::sampling::rng::Pcg32;
-use chronolux_render::temporal::window_film::{Contribution, FilmStats, WindowFilm};
+use chronolux_render::framework::window_film::{Contribution, FilmStats, WindowFilm};
 use std::time::Instant;
 
 struct Opts {
@@ -267,8 +267,8 @@ fn main() {
     }
     if o.render_ref {
         use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
-        use chronolux_render::integrator::Integrator;
-        use chronolux_render::pt::{PathSettings, PathTracer};
+        use chronolux_render::framework::integrator::Integrator;
+        use chronolux_render::kernels::path::{PathSettings, PathTracer};
         let desc = std::sync::Arc::new(chronolux_core::scene::stage::demo());
         let anim = Some(chronolux_core::scene::desc::AnimationId(0));
         let (rw, rh) = (480u32, 270u32);

@@ -38,16 +38,7 @@
 //!   a paged store) and re-cast those a change reached plus a fraction chosen by age —
 //!   [`pmic::selective`].
 
-pub mod aov;
-pub mod bdpt;
-pub mod dept;
-pub mod integrator;
+pub mod framework;
 pub mod kernels;
-pub mod motion_blur;
-pub mod pmic;
-pub mod pt;
 pub mod registry;
-pub mod run;
-pub mod sequence;
-pub mod spt;
-pub mod temporal;
+pub mod techniques;

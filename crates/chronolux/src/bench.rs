@@ -27,8 +27,8 @@ use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder, FrameScene};
 use chronolux_core::scene::generated::TerrainSpheres;
 use chronolux_core::scene::source::FrameSource;
+use chronolux_render::framework::run::MemorySink;
 use chronolux_render::registry::{self, BuildContext};
-use chronolux_render::run::MemorySink;
 use clap::{Args, Subcommand};
 use rayon::prelude::*;
 use serde_json::{Value, json};
@@ -566,7 +566,7 @@ fn pt(a: PtArgs) -> Result<()> {
             let mut sink = MemorySink::new();
             let run = pool
                 .install(|| {
-                    chronolux_render::run::run(
+                    chronolux_render::framework::run::run(
                         tracer.as_mut(),
                         &mut source,
                         &[f],

@@ -34,12 +34,12 @@ use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::desc::{AnimationId, Material, MaterialId, SceneDesc, Trs};
 use chronolux_core::scene::frame::{FrameBuilder, FrameScene};
 use chronolux_core::scene::stage::{ROOM_HALF, cube_primitive};
-use chronolux_render::dept::element_map::{ElementAccumulators, FrameElements};
-use chronolux_render::dept::reconstruct::{Filter, Neighbours, filter_with};
+use chronolux_render::framework::run::cpu_seconds;
+use chronolux_render::kernels::elements::element_map::{ElementAccumulators, FrameElements};
+use chronolux_render::kernels::elements::reconstruct::{Filter, Neighbours, filter_with};
 use chronolux_render::registry;
-use chronolux_render::run::cpu_seconds;
-use chronolux_render::spt::pool::{Budget, SptState};
-use chronolux_render::spt::{Order, SptSettings};
+use chronolux_render::techniques::spt::pool::{Budget, SptState};
+use chronolux_render::techniques::spt::{Order, SptSettings};
 use clap::Args;
 use serde_json::{Value, json};
 use std::sync::Arc;
@@ -234,8 +234,10 @@ fn run_in_pool(a: UpdateArgs) -> Result<()> {
     }
     let settings_json = registry::resolve(tech, None, &sets).map_err(anyhow::Error::msg)?;
     let base: SptSettings = serde_json::from_value(settings_json.clone())?;
-    let mesh =
-        chronolux_render::dept::element_map::ElementMesh::build(&sa, base.elements_per_diagonal());
+    let mesh = chronolux_render::kernels::elements::element_map::ElementMesh::build(
+        &sa,
+        base.elements_per_diagonal(),
+    );
     if !mesh.matches(&sb) || sa.lights.len() != sb.lights.len() {
         bail!("the change alters the scene's topology; spt cannot update across it");
     }

@@ -11,7 +11,7 @@
 //! chosen technique has no setting for is an error, never silently ignored.
 
 use anyhow::{Context, Result, bail};
-use chronolux_render::dept::budget::PhotonCount;
+use chronolux_render::kernels::elements::budget::PhotonCount;
 use chronolux_render::registry::{self, Technique};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
@@ -45,7 +45,7 @@ pub struct RunConfig {
     pub view: chronolux_io::image::View,
     /// Render passes written as EXR layers.
     #[serde(default)]
-    pub passes: chronolux_render::aov::PassSet,
+    pub passes: chronolux_render::framework::aov::PassSet,
     /// Denoise with Open Image Denoise (on by default where the library can be had).
     #[serde(default)]
     pub denoise: bool,
@@ -81,7 +81,7 @@ pub struct PartialRun {
     pub frames: Option<Vec<u32>>,
     pub shutter: Option<f32>,
     pub exposure: Option<f32>,
-    pub passes: Option<chronolux_render::aov::PassSet>,
+    pub passes: Option<chronolux_render::framework::aov::PassSet>,
     pub denoise: Option<bool>,
     pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
     pub quality: Option<String>,

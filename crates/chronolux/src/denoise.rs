@@ -2,7 +2,7 @@
 //! turns it off), in the default build.
 //!
 //! The beauty is filtered by OIDN's `RT` filter in HDR mode with the first-hit albedo and
-//! shading normal of the run's render passes ([`chronolux_render::aov`]) as auxiliary
+//! shading normal of the run's render passes ([`chronolux_render::framework::aov`]) as auxiliary
 //! images; the noisy beauty is kept as a layer of the EXR (`ViewLayer.Noisy Image`).
 //!
 //! The library is loaded at run time, not linked, so that one build both denoises where
@@ -22,7 +22,7 @@
 //! declared in [`ffi`]; `unsafe` is confined there.
 
 use chronolux_core::color::Rgb;
-use chronolux_render::aov::Aovs;
+use chronolux_render::framework::aov::Aovs;
 use std::path::PathBuf;
 
 /// Why denoising cannot be used on this machine (`None`: it can). Loads the library and
@@ -94,7 +94,7 @@ pub fn denoise(pixels: &[Rgb], aovs: &Aovs, quality: DenoiseQuality) -> Result<V
         .collect())
 }
 
-/// The EXR channels of the passes (see `chronolux_render::aov` for the conventions):
+/// The EXR channels of the passes (see `chronolux_render::framework::aov` for the conventions):
 /// Blender's multilayer names `ViewLayer.<pass>.<channel>`.
 pub fn pass_channels(aovs: &Aovs) -> Vec<(String, Vec<f32>)> {
     let mut out = Vec::new();
@@ -144,9 +144,9 @@ pub fn pass_channels(aovs: &Aovs) -> Vec<(String, Vec<f32>)> {
 
 /// The EXR channels of a technique's light split (`ViewLayer.Direct.{R,G,B}`,
 /// `ViewLayer.Indirect.{R,G,B}`; they add up to the beauty, see
-/// [`chronolux_render::integrator::LightSplit`]).
+/// [`chronolux_render::framework::integrator::LightSplit`]).
 pub fn light_channels(
-    light: &chronolux_render::integrator::LightSplit,
+    light: &chronolux_render::framework::integrator::LightSplit,
     direct: bool,
     indirect: bool,
 ) -> Vec<(String, Vec<f32>)> {

@@ -13,8 +13,8 @@ use anyhow::Result;
 use chronolux_core::scene::desc::{AnimationId, SceneDesc};
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
 use chronolux_core::scene::source::frame_time;
-use chronolux_render::integrator::Integrator;
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_render::framework::integrator::Integrator;
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
 use std::sync::Arc;
 
 /// Long side of the pre-pass image. 128 px is enough to rank luminances (the 90th

@@ -20,9 +20,9 @@ use chronolux_core::metrics::{self, flip};
 use chronolux_core::scene::frame::FrameBuilder;
 use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::read_exr;
-use chronolux_render::aov::PassSet;
+use chronolux_render::framework::aov::PassSet;
+use chronolux_render::framework::run::{FinishedFrame, FrameSink, RunOptions};
 use chronolux_render::registry::{self, BuildContext, Technique};
-use chronolux_render::run::{FinishedFrame, FrameSink, RunOptions};
 use clap::Args;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -117,7 +117,10 @@ struct ScoredSink {
 }
 
 impl FrameSink for ScoredSink {
-    fn frame(&mut self, f: &FinishedFrame) -> Result<(), chronolux_render::run::SinkError> {
+    fn frame(
+        &mut self,
+        f: &FinishedFrame,
+    ) -> Result<(), chronolux_render::framework::run::SinkError> {
         let pixels = if let Some(quality) = self.denoise {
             let aovs = f
                 .aovs
@@ -452,7 +455,7 @@ pub fn run(args: QualityArgs) -> Result<()> {
                 },
                 seed: args.seed,
             };
-            let run = chronolux_render::run::run_with(
+            let run = chronolux_render::framework::run::run_with(
                 renderer.as_mut(),
                 &mut source,
                 rendered,

@@ -18,7 +18,7 @@
 //!
 //! ## Independence of the samples
 //! The frames are rendered by the registry's `path` technique as successive passes
-//! through the progressive run loop (`chronolux_render::run::run_progressive`,
+//! through the progressive run loop (`chronolux_render::framework::run::run_progressive`,
 //! `FrameByFrame::render_passes`): pass 2r + h is round r of half h (even passes make A,
 //! odd ones B) and draws from its own seed, `batch_seed(--seed, round, half)`: each seed
 //! is a different Owen scrambling of the Sobol sequence, i.e. an independent
@@ -41,9 +41,9 @@ use chronolux_core::scene::frame::FrameBuilder;
 use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::{Image, write_exr};
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest, frame_stem};
+use chronolux_render::framework::run;
+use chronolux_render::framework::sequence::{Flow, Pass, PassPlan};
 use chronolux_render::registry::{self, BuildContext};
-use chronolux_render::run;
-use chronolux_render::sequence::{Flow, Pass, PassPlan};
 use clap::Args;
 use std::sync::Arc;
 
@@ -357,7 +357,7 @@ pub fn run(args: ReferenceArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use chronolux_render::sequence::batch_seed;
+    use chronolux_render::framework::sequence::batch_seed;
 
     #[test]
     fn estimate_of_identical_halves_is_zero_and_of_known_halves_is_computed() {

@@ -12,9 +12,9 @@ use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
 use chronolux_core::scene::source::FrameSource;
 use chronolux_io::image::Image;
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
-use chronolux_render::aov::PassSet;
+use chronolux_render::framework::aov::PassSet;
+use chronolux_render::framework::run;
 use chronolux_render::registry::{self, BuildContext};
-use chronolux_render::run;
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::sync::Arc;
 
@@ -179,7 +179,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
     }
     let view = args.view.or(prev.view).unwrap_or_default();
     let shutter = args.shutter.or(prev.shutter).unwrap_or(0.0);
-    chronolux_render::motion_blur::check_shutter(shutter).map_err(anyhow::Error::msg)?;
+    chronolux_render::framework::technique::check_shutter(shutter).map_err(anyhow::Error::msg)?;
     let mut flags = Vec::new();
     let mut flag = |flag: &'static str, key: &'static str, value: Option<serde_json::Value>| {
         if let Some(value) = value {
@@ -474,7 +474,7 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         warm_up_until,
     };
     let mut progress = progress;
-    let result = chronolux_render::run::run_with(
+    let result = chronolux_render::framework::run::run_with(
         renderer.as_mut(),
         &mut source,
         &frames,

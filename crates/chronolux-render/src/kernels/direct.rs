@@ -1,6 +1,6 @@
 //! The one next-event-estimation kernel (direct light by light sampling with a
 //! ray-traced shadow) and the emitted radiance of a sampled light point, shared by the
-//! path tracer ([`crate::pt`]), the eye pass of the photon methods ([`crate::dept::view`])
+//! path tracer ([`crate::kernels::path`]), the eye pass of the photon methods ([`crate::kernels::elements::view`])
 //! and, for the emission helpers, BDPT and the photon kernel.
 //!
 //! ## Sample dimensions

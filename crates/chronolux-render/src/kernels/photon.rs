@@ -20,7 +20,7 @@
 //! the Halton sequence (points `i` and `i + m·N_g` agree in dimension `j` to within
 //! `b_j^-k_j` when `b_j^k_j` divides `N_g`, Dmitriev et al. 2002, Eq. 1) makes groups of
 //! photons `i ≡ r (mod N_g)` coherent with a small `N_g` (selective photon tracing,
-//! [`crate::spt`]). The light choice is folded into dimension 0: the power-proportional
+//! [`crate::techniques::spt`]). The light choice is folded into dimension 0: the power-proportional
 //! [`LightSampler`](chronolux_core::light::LightSampler) inverts its CDF at `u₀` and the
 //! remainder `(u₀ − cdf_l)/pmf_l`, again uniform in [0, 1), is the first coordinate of the
 //! point on the chosen light — the emitters are sampled as one surface, so photons that
@@ -52,7 +52,7 @@ use super::direct::light_radiance_at;
 use chronolux_core::accel::TriRef;
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, max_component};
-use chronolux_core::geometry::{Ray, spawn_ray};
+use chronolux_core::geometry::{Bounds3, Ray, spawn_ray};
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::qmc::halton;
@@ -155,7 +155,7 @@ pub fn trace_photon(
 /// [`trace_photon`] ending the path after its hit with `max_bounces` scattering events
 /// (at most [`MAX_BOUNCES`]): the same hits as [`trace_photon`]'s with
 /// [`PhotonHit::bounces`] ≤ `max_bounces`, without tracing the rest of the path (a
-/// depth-limited render's photons, [`crate::dept::element_map::max_photon_bounces`]).
+/// depth-limited render's photons, [`crate::kernels::elements::element_map::max_photon_bounces`]).
 pub fn trace_photon_within(
     scene: &FrameScene,
     index: u64,
@@ -380,4 +380,29 @@ pub fn trace_photons_within<T: Send>(
         stats += s;
     }
     (all, stats)
+}
+
+/// Slab test: does the segment `o + t·d`, `t ∈ [0, t_max]`, meet box `b`? (Which photon
+/// paths a change reached: `spt`'s path scan, `ic-static-dynamic`'s sweep.)
+#[inline]
+pub fn segment_hits_box(o: Vec3, d: Vec3, t_max: f32, b: &Bounds3) -> bool {
+    let (mut t0, mut t1) = (0.0f32, t_max);
+    for k in 0..3 {
+        let inv = 1.0 / d[k];
+        let (mut a, mut c) = ((b.min[k] - o[k]) * inv, (b.max[k] - o[k]) * inv);
+        if a > c {
+            std::mem::swap(&mut a, &mut c);
+        }
+        // NaN (d = 0 and o on a slab plane) keeps the current interval.
+        if a > t0 {
+            t0 = a;
+        }
+        if c < t1 {
+            t1 = c;
+        }
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
 }

@@ -1,7 +1,7 @@
 //! Render passes: analytic values on the moving quad of the blur tests (an emitter 8 px
 //! wide, orthographic camera, moving +16 px per frame), determinism, every technique.
 
-use chronolux_render::aov::{DEPTH_MISS, PassSet, render_aovs};
+use chronolux_render::framework::aov::{DEPTH_MISS, PassSet, render_aovs};
 
 /// The blur tests' scene: 64×4 pixels, the quad at z = −1 seen through an orthographic
 /// camera at the origin, its centre at raster x = 32 at frame 1 (1 fps), +16 px per frame.

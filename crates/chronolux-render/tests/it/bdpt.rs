@@ -12,9 +12,9 @@ use chronolux_core::scene::desc::{
 use chronolux_core::scene::stage;
 use chronolux_core::scene::testing::furnace;
 use chronolux_core::testing::{Estimate, block_z_test, channel_means};
-use chronolux_render::bdpt::{Bdpt, BdptSettings, MisHeuristic};
-use chronolux_render::integrator::{Integrator, RenderedFrame};
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_render::framework::integrator::{Integrator, RenderedFrame};
+use chronolux_render::kernels::bdpt::{Bdpt, BdptSettings, MisHeuristic};
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
 
 fn bdpt(spp: u32, max_depth: Option<u32>, mis: MisHeuristic) -> Bdpt {
     Bdpt::new(BdptSettings {
@@ -277,7 +277,7 @@ fn environment_and_spot(env: Environment, what: &str) {
 fn densities_after_a_delta_vertex_keep_their_geometry_factor() {
     use chronolux_core::sampling::sampler::PixelSampler;
     use chronolux_core::stats::Stats;
-    use chronolux_render::bdpt::generate_camera_subpath;
+    use chronolux_render::kernels::bdpt::generate_camera_subpath;
     let scene = frame0(stage::demo(), 32, 32);
     let settings = BdptSettings::default();
     let (mut path, mut stats, mut checked) = (Vec::new(), Stats::default(), 0);
@@ -329,7 +329,7 @@ fn densities_after_a_delta_vertex_keep_their_geometry_factor() {
 fn view_split_reweights_a_path_for_another_camera_exactly() {
     use chronolux_core::sampling::sampler::PixelSampler;
     use chronolux_core::stats::Stats;
-    use chronolux_render::bdpt::{
+    use chronolux_render::kernels::bdpt::{
         Vertex, connect_with, generate_camera_subpath, generate_light_subpath, mis_weight,
         view_split,
     };

@@ -10,16 +10,16 @@ use chronolux_core::scene::desc::{
     Animation, Channel, ChannelTarget, Interpolation, Material, Primitive, Projection, Trs,
 };
 use chronolux_core::scene::testing::single_mesh_scene;
-use chronolux_render::bdpt::{Bdpt, BdptSettings};
-use chronolux_render::integrator::Integrator;
-use chronolux_render::motion_blur::{
-    MotionBlur, MotionBlurPath, check_shutter, instant_of, shutter_instants,
-};
-use chronolux_render::pt::{PathSettings, PathTracer};
-use chronolux_render::sequence::SequenceRenderer;
-use chronolux_render::temporal::blur::{
+use chronolux_render::framework::integrator::Integrator;
+use chronolux_render::framework::integrator::instant_of;
+use chronolux_render::framework::sequence::SequenceRenderer;
+use chronolux_render::framework::shutter::{MotionBlur, shutter_instants};
+use chronolux_render::framework::technique::check_shutter;
+use chronolux_render::kernels::bdpt::{Bdpt, BdptSettings};
+use chronolux_render::kernels::blur::{
     PixelShare, TrajectoryVertex, segment_cells, splat_trajectory,
 };
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
 use std::collections::BTreeMap;
 
 /// Pixels crossed by a segment and the length inside each, in order.
@@ -398,7 +398,7 @@ fn shutter_path_tracing_matches_the_analytic_blur_of_a_moving_quad() {
         ..Default::default()
     });
     let mut source = crate::source(moving_quad(), IW, IH, FPS, vec![1]);
-    let mut mb = MotionBlurPath::new(tracer.clone(), SHUTTER);
+    let mut mb = MotionBlur::<PathTracer>::new(tracer.clone(), SHUTTER);
     let t = mb.instants() as usize;
     assert_eq!(t, 16);
     let img = mb.render_frame(&mut source, 1, &|_| {});
@@ -435,7 +435,7 @@ fn shutter_path_tracing_matches_the_analytic_blur_of_a_moving_quad() {
     let sharp = tracer.render(&source.frame(1), 1, &|_| {});
     assert_eq!(sharp.pixels[32].x, 1.0);
     // Closed shutter: exactly the frame without motion blur.
-    let mut closed = MotionBlurPath::new(tracer, 0.0);
+    let mut closed = MotionBlur::<PathTracer>::new(tracer, 0.0);
     let c = closed.render_frame(&mut source, 1, &|_| {});
     assert_eq!(c.pixels, sharp.pixels);
 }
@@ -505,7 +505,7 @@ fn time_sampled_frames_do_not_depend_on_the_thread_count() {
     });
     let render = |threads: usize| {
         let mut source = crate::source(moving_quad(), IW, IH, FPS, vec![1]);
-        let mut mb = MotionBlurPath::new(tracer.clone(), SHUTTER);
+        let mut mb = MotionBlur::<PathTracer>::new(tracer.clone(), SHUTTER);
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
@@ -598,10 +598,10 @@ fn shutter_bdpt_and_path_agree_on_the_moving_demo() {
     assert_eq!(p.invalid_samples + b.invalid_samples, 0);
     let n = (w * h) as f64;
     for c in 0..3 {
-        let mean = |f: &chronolux_render::integrator::RenderedFrame| {
+        let mean = |f: &chronolux_render::framework::integrator::RenderedFrame| {
             f.pixels.iter().map(|v| v[c] as f64).sum::<f64>() / n
         };
-        let var = |f: &chronolux_render::integrator::RenderedFrame| {
+        let var = |f: &chronolux_render::framework::integrator::RenderedFrame| {
             f.variance.iter().map(|v| v[c] as f64).sum::<f64>() / (n * n)
         };
         let se = (var(&p) + var(&b)).sqrt();
@@ -626,7 +626,7 @@ fn shutter_bdpt_and_path_agree_on_the_moving_demo() {
 /// (1e-4 px, as in the BDPT test above) times the profile's slope (1/12 per px).
 #[test]
 fn shutter_stbpt_matches_the_analytic_blur_of_a_moving_quad() {
-    use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings};
+    use chronolux_render::techniques::stbpt::{Stbpt, StbptSettings};
     let mut source = crate::source(moving_quad_seen(false), IW, IH, FPS, vec![0, 1, 2]);
     let mut st = Stbpt::new(StbptSettings {
         bdpt: BdptSettings {

@@ -8,9 +8,9 @@ use chronolux_core::material;
 use chronolux_core::math::Vec2;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::stage;
-use chronolux_render::bdpt::caustic::caustic_image;
-use chronolux_render::bdpt::{Bdpt, BdptSettings};
-use chronolux_render::integrator::{Integrator, render_with_splats};
+use chronolux_render::framework::integrator::{Integrator, render_with_splats};
+use chronolux_render::kernels::bdpt::caustic::caustic_image;
+use chronolux_render::kernels::bdpt::{Bdpt, BdptSettings};
 
 /// Pixels whose centre ray first hits a surface with only delta lobes (the glass sphere):
 /// where the paths E S⁺ X S⁺ L are seen.
@@ -80,8 +80,10 @@ const BIAS: f64 = 0.25;
 fn dropped_paths_equal_the_photon_estimate_through_glass() {
     use chronolux_core::sampling::sampler::PixelSampler;
     use chronolux_core::stats::Stats;
-    use chronolux_render::bdpt::caustic::is_caustic_path;
-    use chronolux_render::bdpt::{connect_with, generate_camera_subpath, generate_light_subpath};
+    use chronolux_render::kernels::bdpt::caustic::is_caustic_path;
+    use chronolux_render::kernels::bdpt::{
+        connect_with, generate_camera_subpath, generate_light_subpath,
+    };
     let scene = frame0(stage::demo(), 32, 32);
     let mask = glass_mask(&scene);
     let pixels = mask.iter().filter(|&&m| m).count();
@@ -129,7 +131,7 @@ fn dropped_paths_equal_the_photon_estimate_through_glass() {
                             dropped_here += 1;
                         }
                     } else {
-                        let key = |c: Option<chronolux_render::bdpt::Connection>| {
+                        let key = |c: Option<chronolux_render::kernels::bdpt::Connection>| {
                             c.map(|c| {
                                 (
                                     c.contribution.l.to_array().map(f32::to_bits),
@@ -270,8 +272,8 @@ fn caustic_estimate_changes_nothing_else() {
 /// dropped, and only they reach the photons).
 #[test]
 fn stbpt_adds_the_pass_to_each_served_frame_and_nothing_elsewhere() {
-    use chronolux_render::sequence::SequenceRenderer;
-    use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings};
+    use chronolux_render::framework::sequence::SequenceRenderer;
+    use chronolux_render::techniques::stbpt::{Stbpt, StbptSettings};
     const N: u32 = 32;
     let frames: Vec<u32> = (0..4).collect();
     let settings = |photons| StbptSettings {

@@ -10,12 +10,16 @@ use chronolux_core::scene::desc::{
 };
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
 use chronolux_core::scene::stage::cornell_box;
-use chronolux_render::dept::element_map::{ElementAccumulators, ElementMesh, FrameElements, slot};
-use chronolux_render::dept::reconstruct::{ElementSolution, Filter, filtered_irradiance};
-use chronolux_render::dept::{Dept, DeptSettings};
-use chronolux_render::integrator::Integrator;
+use chronolux_render::framework::integrator::Integrator;
+use chronolux_render::kernels::elements::element_map::{
+    ElementAccumulators, ElementMesh, FrameElements, slot,
+};
+use chronolux_render::kernels::elements::reconstruct::{
+    ElementSolution, Filter, filtered_irradiance,
+};
+use chronolux_render::kernels::elements::{Dept, DeptSettings};
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
 use chronolux_render::kernels::photon::trace_photons;
-use chronolux_render::pt::{PathSettings, PathTracer};
 use std::sync::Arc;
 
 /// Mean of each `b`×`b` block (channel average).
@@ -456,8 +460,8 @@ fn dept_is_bit_identical_across_thread_counts() {
 /// windows and the bilateral range kernel stops at the lamp's edge).
 #[test]
 fn spacetime_dept_pools_frames_on_a_static_scene() {
-    use chronolux_render::sequence::SequenceRenderer;
-    use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
+    use chronolux_render::framework::sequence::SequenceRenderer;
+    use chronolux_render::techniques::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
     let scene = frame0(cornell_box(), 32, 32);
     let mut src = crate::source(cornell_box(), 32, 32, 24.0, (0..5).collect());
     let (spp, elements) = (16, 50.0);
@@ -529,8 +533,8 @@ fn spacetime_dept_pools_frames_on_a_static_scene() {
 /// `spacetime_dept_pools_frames_on_a_static_scene`.
 #[test]
 fn dept_max_depth_agrees_with_path_tracing_at_that_depth() {
-    use chronolux_render::sequence::SequenceRenderer;
-    use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
+    use chronolux_render::framework::sequence::SequenceRenderer;
+    use chronolux_render::techniques::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
     let scene = frame0(cornell_box(), 32, 32);
     let pt = |d: u32| {
         let img = PathTracer::new(PathSettings {
@@ -598,7 +602,7 @@ fn dept_max_depth_agrees_with_path_tracing_at_that_depth() {
 /// and the frame's solution then meets the criterion it was stopped on.
 #[test]
 fn stopping_rule_shoots_more_photons_for_a_tighter_threshold() {
-    use chronolux_render::dept::budget::AutoPhotons;
+    use chronolux_render::kernels::elements::budget::AutoPhotons;
     let scene = frame0(cornell_box(), 16, 16);
     let solve = |weber: f32| {
         let rule = AutoPhotons {
@@ -720,7 +724,7 @@ fn fine_irradiance(
     frame: u32,
     photons: u64,
 ) -> Vec<f32> {
-    use chronolux_render::dept::element_map::deposit_photons;
+    use chronolux_render::kernels::elements::element_map::deposit_photons;
     let scene = src.frame(frame);
     let fe = FrameElements::new(&scene, mesh);
     let p = deposit_photons(&scene, mesh, 0..photons, 7);
@@ -754,8 +758,8 @@ fn weighted_fraction(sides: &[(usize, f32)], bad: impl Fn(usize) -> bool) -> f32
 #[test]
 fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
     use chronolux_core::scene::stage::{CAUSTIC_OCCLUDER_TIME, caustic};
-    use chronolux_render::sequence::SequenceRenderer;
-    use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
+    use chronolux_render::framework::sequence::SequenceRenderer;
+    use chronolux_render::techniques::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
     const { assert!(3.0 / 24.0 < CAUSTIC_OCCLUDER_TIME && CAUSTIC_OCCLUDER_TIME < 4.0 / 24.0) };
     let elements = 30.0;
     let frames: Vec<u32> = (0..8).collect();
@@ -834,8 +838,8 @@ fn spacetime_window_stops_at_an_abrupt_change_and_spans_static_frames() {
 /// `change_radius` 2.5, ≤ 0.5 % with 5; 5 % is the margin).
 #[test]
 fn spacetime_window_is_whole_on_a_static_scene() {
-    use chronolux_render::sequence::SequenceRenderer;
-    use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
+    use chronolux_render::framework::sequence::SequenceRenderer;
+    use chronolux_render::techniques::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
     let frames: Vec<u32> = (0..9).collect();
     let mut src = crate::source(cornell_box(), 8, 8, 24.0, frames.clone());
     let mut st = SpacetimeDept::new(SpacetimeSettings {
@@ -1082,8 +1086,8 @@ fn spacetime_dept_pools_sunlight_where_the_moving_cube_stays_off_the_shadow_rays
 }
 
 fn pooled_light_agrees_with_the_frames_own(desc: SceneDesc) {
-    use chronolux_render::sequence::SequenceRenderer;
-    use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
+    use chronolux_render::framework::sequence::SequenceRenderer;
+    use chronolux_render::techniques::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
     let (w, spp) = (32u32, 4u32);
     let run = |seed: u64, light_history: u32, spp: u32| {
         let mut src = crate::source(desc.clone(), w, w, 4.0, (0..7).collect());
@@ -1112,7 +1116,7 @@ fn pooled_light_agrees_with_the_frames_own(desc: SceneDesc) {
         "mean light samples per pixel {pooled}"
     );
     let (ra, rb) = (run(1, 0, 256), run(2, 0, 256));
-    let direct = |img: &chronolux_render::integrator::RenderedFrame| {
+    let direct = |img: &chronolux_render::framework::integrator::RenderedFrame| {
         img.light.as_ref().unwrap().direct.clone()
     };
     let scene6 = crate::source(desc.clone(), w, w, 4.0, vec![6]).frame(6);
@@ -1190,7 +1194,7 @@ fn pooled_light_agrees_with_the_frames_own(desc: SceneDesc) {
 #[test]
 fn neighbour_lists_updated_across_frames_equal_rebuilt_ones() {
     use chronolux_core::scene::stage::caustic;
-    use chronolux_render::dept::reconstruct::Neighbours;
+    use chronolux_render::kernels::elements::reconstruct::Neighbours;
     let mut src = crate::source(caustic(), 8, 8, 24.0, (0..6).collect());
     let mesh = ElementMesh::build(&src.frame(0), 30.0);
     for radius in [2.5, 5.0] {
@@ -1249,7 +1253,7 @@ fn neighbour_lists_updated_across_frames_equal_rebuilt_ones() {
 #[test]
 fn temporal_range_kernel_bounds_a_step_and_keeps_static_noise_falling_as_one_over_n() {
     use chronolux_core::sampling::rng::Pcg32;
-    use chronolux_render::temporal::spacetime_dept::temporal_weight;
+    use chronolux_render::techniques::spacetime_dept::temporal_weight;
     let (kappa, sigma_t) = (2.0f32, 8.0f32);
     let gauss = |dt: f32| (-dt * dt / (2.0 * sigma_t * sigma_t)).exp();
     // Step.
@@ -1343,7 +1347,7 @@ fn temporal_range_kernel_bounds_a_step_and_keeps_static_noise_falling_as_one_ove
 /// with no photons around it gets the widest support, `ADAPTIVE_RANGE` · σ₀².
 #[test]
 fn adaptive_support_follows_the_photon_density() {
-    use chronolux_render::dept::reconstruct::{
+    use chronolux_render::kernels::elements::reconstruct::{
         ADAPTIVE_LIST_RADIUS, ADAPTIVE_RANGE, Neighbours, adaptive_sigma2,
     };
     let scene = frame0(cornell_box(), 8, 8);
@@ -1438,8 +1442,9 @@ fn dept_direct_light_under_a_sky_agrees_with_path_tracing() {
     }
     let w = 32u32;
     let scene = frame0(desc, w, w);
-    let direct =
-        |img: chronolux_render::integrator::RenderedFrame| img.light.expect("a light split").direct;
+    let direct = |img: chronolux_render::framework::integrator::RenderedFrame| {
+        img.light.expect("a light split").direct
+    };
     let pt = |seed| {
         direct(
             PathTracer::new(PathSettings {
@@ -1502,9 +1507,9 @@ fn dept_direct_light_under_a_sky_agrees_with_path_tracing() {
 fn spacetime_dept_renders_as_path_only_where_the_probe_finds_nothing_to_gain() {
     use chronolux_core::light::Environment;
     use chronolux_core::scene::stage::demo;
-    use chronolux_render::sequence::SequenceRenderer;
-    use chronolux_render::temporal::probe::MAX_PATH_RATIO;
-    use chronolux_render::temporal::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
+    use chronolux_render::framework::sequence::SequenceRenderer;
+    use chronolux_render::kernels::probe::MAX_PATH_RATIO;
+    use chronolux_render::techniques::spacetime_dept::{SpacetimeDept, SpacetimeSettings};
     let (w, spp, seed) = (24u32, 4u32, 7u64);
     let settings = SpacetimeSettings {
         common: chronolux_render::registry::CommonSettings {

@@ -3,8 +3,8 @@
 
 use crate::frame0;
 use chronolux_core::scene::testing::furnace;
-use chronolux_render::integrator::Integrator;
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_render::framework::integrator::Integrator;
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
 
 #[test]
 fn bit_identical_across_thread_counts() {
@@ -41,7 +41,7 @@ fn bit_identical_across_thread_counts() {
 
 #[test]
 fn bit_identical_across_tile_sizes() {
-    use chronolux_render::integrator::render_camera_rays_tiled;
+    use chronolux_render::framework::integrator::render_camera_rays_tiled;
     let scene = frame0(furnace(0.6, 0.4), 37, 21);
     let pt = PathTracer::new(PathSettings {
         common: chronolux_render::registry::CommonSettings {

@@ -3,8 +3,8 @@
 
 use crate::{frame0, mean_and_stderr};
 use chronolux_core::scene::testing::furnace;
-use chronolux_render::integrator::Integrator;
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_render::framework::integrator::Integrator;
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
 
 fn render(a: f32, le: f32, max_depth: Option<u32>, spp: u32) -> (f64, f64) {
     let scene = frame0(furnace(a, le), 16, 16);

@@ -8,13 +8,16 @@ use chronolux_core::math::Frame;
 use chronolux_core::sampling::rng::Pcg32;
 use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::desc::SceneDesc;
-use chronolux_render::integrator::RenderedFrame;
-use chronolux_render::pmic::selective::{
+use chronolux_render::framework::integrator::RenderedFrame;
+use chronolux_render::framework::sequence::SequenceRenderer;
+use chronolux_render::kernels::gather::{PmIcSettings, frame_maps, gather_ray_hit, photon_base};
+use chronolux_render::techniques::ic_selective::store::{
+    MemoryStore, PagedStore, StrataStore, Stratum,
+};
+use chronolux_render::techniques::ic_selective::{
     IcSelective, IcSelectiveSettings, cast_stratum, select_by_age, stratum_dir,
 };
-use chronolux_render::pmic::store::{MemoryStore, PagedStore, StrataStore, Stratum};
-use chronolux_render::pmic::{PmIc, PmIcSettings, frame_maps, gather_ray_hit, photon_base};
-use chronolux_render::sequence::SequenceRenderer;
+use chronolux_render::techniques::pm_ic::PmIc;
 
 /// Small settings: few photons, one camera sample, a 6 × 18 gather.
 fn small(photons: u64, m: u32, n: u32) -> PmIcSettings {

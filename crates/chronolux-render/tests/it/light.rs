@@ -6,9 +6,9 @@ use crate::bits;
 use crate::source;
 use chronolux_core::color::Rgb;
 use chronolux_core::scene::desc::SceneDesc;
-use chronolux_render::integrator::RenderedFrame;
+use chronolux_render::framework::integrator::RenderedFrame;
+use chronolux_render::framework::sequence::SequenceRenderer;
 use chronolux_render::registry::{self, BuildContext};
-use chronolux_render::sequence::SequenceRenderer;
 use serde_json::{Value, json};
 
 const W: u32 = 24;
@@ -115,7 +115,7 @@ fn techniques_that_do_not_separate_light_say_so() {
         assert!(r.separates_light(), "{method}");
     }
     // Asking a technique that does not separate them is an error; `all` drops them.
-    use chronolux_render::aov::PassSet;
+    use chronolux_render::framework::aov::PassSet;
     let named = PassSet::parse("albedo,direct").unwrap();
     let err = named.resolve("stbpt", false).unwrap_err();
     assert!(err.contains("stbpt") && err.contains("direct"), "{err}");

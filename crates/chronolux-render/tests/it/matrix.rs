@@ -13,9 +13,9 @@ use crate::bits;
 use crate::source;
 use chronolux_core::scene::desc::SceneDesc;
 use chronolux_core::scene::stage;
-use chronolux_render::integrator::RenderedFrame;
+use chronolux_render::framework::integrator::RenderedFrame;
+use chronolux_render::framework::run::{self, MemorySink};
 use chronolux_render::registry::{self, BuildContext, TECHNIQUES, Technique};
-use chronolux_render::run::{self, MemorySink};
 use serde_json::Value;
 
 const W: u32 = 24;

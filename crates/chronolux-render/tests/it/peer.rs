@@ -5,8 +5,8 @@
 use chronolux_core::scene::desc::AnimationId;
 use chronolux_core::scene::frame::{CameraChoice, FrameBuilder};
 use chronolux_core::testing::{Estimate, block_z_test, channel_means, shared_file};
-use chronolux_render::integrator::Integrator;
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_render::framework::integrator::Integrator;
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
 use std::sync::Arc;
 
 /// Relative noise of the Mitsuba reference itself, from ../shared/peers/README.md:

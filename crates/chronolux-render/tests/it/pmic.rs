@@ -7,13 +7,16 @@ use chronolux_core::color::Rgb;
 use chronolux_core::math::Vec3;
 use chronolux_core::sampling::rng::Pcg32;
 use chronolux_core::scene::stage::cornell_box;
-use chronolux_render::integrator::Integrator;
-use chronolux_render::pmic::cache::{Gather, IrradianceCache, Record, gather};
-use chronolux_render::pmic::photon_map::{
+use chronolux_render::framework::integrator::Integrator;
+use chronolux_render::kernels::gather::PmIcSettings;
+use chronolux_render::kernels::gather::irradiance_cache::{
+    Gather, IrradianceCache, Record, gather,
+};
+use chronolux_render::kernels::gather::photon_map::{
     Lookup, MapFilter, PhotonMap, StoredPhoton, cancel_twins,
 };
-use chronolux_render::pmic::{PmIc, PmIcSettings};
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
+use chronolux_render::techniques::pm_ic::PmIc;
 
 fn photon(p: Vec3, flux: f32) -> StoredPhoton {
     StoredPhoton {
@@ -347,8 +350,8 @@ use chronolux_core::scene::desc::{
     Animation, Channel, ChannelTarget, Interpolation, Material, MaterialId, Mesh, MeshId, Node,
     NodeId, SceneDesc, Trs,
 };
-use chronolux_render::pmic::static_dynamic::{IcStaticDynamic, IcStaticDynamicSettings};
-use chronolux_render::sequence::SequenceRenderer;
+use chronolux_render::framework::sequence::SequenceRenderer;
+use chronolux_render::techniques::ic_static_dynamic::{IcStaticDynamic, IcStaticDynamicSettings};
 
 /// The Cornell box with a small white diffuse cube (half-size 0.2) sliding along x on the
 /// floor by 0.4 per second (cornell-moving's configuration in miniature).
@@ -404,7 +407,7 @@ fn sequence(
     r: &mut dyn SequenceRenderer,
     desc: SceneDesc,
     frames: &[u32],
-) -> Vec<chronolux_render::integrator::RenderedFrame> {
+) -> Vec<chronolux_render::framework::integrator::RenderedFrame> {
     let mut src = crate::source(desc, 32, 32, 24.0, frames.to_vec());
     frames
         .iter()
@@ -530,8 +533,8 @@ fn ic_static_dynamic_is_deterministic_across_thread_counts() {
 #[test]
 fn photons_outside_the_retrace_set_keep_their_static_paths() {
     use chronolux_core::scene::delta::FrameDelta;
-    use chronolux_render::pmic::caustic_seed;
-    use chronolux_render::pmic::static_dynamic::{
+    use chronolux_render::kernels::gather::caustic_seed;
+    use chronolux_render::techniques::ic_static_dynamic::{
         Keep, Stream, dynamic_bounds, retrace_set, trace_path,
     };
     let n = 20_000u64;

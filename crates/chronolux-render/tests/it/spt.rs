@@ -7,11 +7,11 @@ use chronolux_core::sampling::qmc::halton;
 use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::stage::{caustic, demo};
-use chronolux_render::dept::element_map::FrameElements;
-use chronolux_render::sequence::SequenceRenderer;
-use chronolux_render::spt::groups::{COHERENT_DIMS, GroupLayout, toroidal_distance};
-use chronolux_render::spt::pool::{Budget, SignedAccumulators, SptState};
-use chronolux_render::spt::{Order, Spt, SptSettings};
+use chronolux_render::framework::sequence::SequenceRenderer;
+use chronolux_render::kernels::elements::element_map::FrameElements;
+use chronolux_render::techniques::spt::groups::{COHERENT_DIMS, GroupLayout, toroidal_distance};
+use chronolux_render::techniques::spt::pool::{Budget, SignedAccumulators, SptState};
+use chronolux_render::techniques::spt::{Order, Spt, SptSettings};
 use std::sync::Arc;
 
 fn settings(photons: u64) -> SptSettings {
@@ -161,7 +161,7 @@ fn displayed(st: &SptState) -> (Vec<f64>, Vec<f64>, Vec<f32>) {
 #[test]
 fn after_draining_the_solution_equals_a_fresh_pass_of_the_new_scene() {
     let (a, b) = two_frames(demo(), 0, 48);
-    let mesh = chronolux_render::dept::element_map::ElementMesh::build(&a, 30.0);
+    let mesh = chronolux_render::kernels::elements::element_map::ElementMesh::build(&a, 30.0);
     let fresh = SptState::new_on_mesh(b.clone(), settings(60_000), mesh.clone());
     let (f_f, sq_f, area) = displayed(&fresh);
     let total: f64 = f_f.iter().map(|x| x.max(0.0)).sum();
@@ -227,7 +227,8 @@ fn queued_groups_are_exactly_up_to_date_after_draining() {
             (0..st.layout.members).any(|m| {
                 let i = st.layout.photon(g, m);
                 m >= st.pilots && {
-                    let (r, _) = chronolux_render::spt::pool::trace_record(&b, &st.mesh, i, 0);
+                    let (r, _) =
+                        chronolux_render::techniques::spt::pool::trace_record(&b, &st.mesh, i, 0);
                     &r != st.record(i)
                 }
             })
@@ -239,7 +240,7 @@ fn queued_groups_are_exactly_up_to_date_after_draining() {
     for &g in &queued {
         let all_fresh = (0..st.layout.members).all(|m| {
             let i = st.layout.photon(g, m);
-            let (r, _) = chronolux_render::spt::pool::trace_record(&b, &st.mesh, i, 0);
+            let (r, _) = chronolux_render::techniques::spt::pool::trace_record(&b, &st.mesh, i, 0);
             &r == st.record(i)
         });
         fixed += all_fresh as u64;
@@ -350,8 +351,8 @@ fn the_frame_budget_carries_groups_over_and_reports_them() {
 /// is ~30 % of the image — not the methods' small differences).
 #[test]
 fn the_eye_pass_agrees_with_dept_spatial_on_the_mean() {
-    use chronolux_render::dept::{Dept, DeptSettings};
-    use chronolux_render::integrator::Integrator;
+    use chronolux_render::framework::integrator::Integrator;
+    use chronolux_render::kernels::elements::{Dept, DeptSettings};
     let mut src = crate::source(demo(), 48, 48, 24.0, vec![0]);
     let scene = src.frame(0);
     let mut spt = Spt::new(SptSettings {

@@ -14,12 +14,12 @@
 use crate::source;
 use chronolux_core::scene::stage;
 use chronolux_core::testing::{Estimate, block_t_test};
-use chronolux_render::bdpt::{Bdpt, BdptSettings};
-use chronolux_render::integrator::{Integrator, RenderedFrame};
-use chronolux_render::sequence::{ReuseStats, SequenceRenderer};
-use chronolux_render::temporal::stbpt::adapt::{GRID, WindowDecision};
-use chronolux_render::temporal::stbpt::strategies::{SWITCH_MARGIN, StrategyDecision};
-use chronolux_render::temporal::stbpt::{Stbpt, StbptSettings, generated_at, stream_index};
+use chronolux_render::framework::integrator::{Integrator, RenderedFrame};
+use chronolux_render::framework::sequence::{ReuseStats, SequenceRenderer};
+use chronolux_render::kernels::bdpt::{Bdpt, BdptSettings};
+use chronolux_render::techniques::stbpt::adapt::{GRID, WindowDecision};
+use chronolux_render::techniques::stbpt::strategies::{SWITCH_MARGIN, StrategyDecision};
+use chronolux_render::techniques::stbpt::{Stbpt, StbptSettings, generated_at, stream_index};
 
 const W: u32 = 32;
 const H: u32 = 32;

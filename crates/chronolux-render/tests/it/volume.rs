@@ -14,8 +14,8 @@ use chronolux_core::scene::desc::{
     CameraDesc, CameraId, Material, MaterialId, Mesh, MeshId, Node, NodeId, Primitive, Projection,
     SceneDesc, Trs, Volume,
 };
-use chronolux_render::integrator::Integrator;
-use chronolux_render::pt::{PathSettings, PathTracer};
+use chronolux_render::framework::integrator::Integrator;
+use chronolux_render::kernels::path::{PathSettings, PathTracer};
 
 /// An axis-aligned box [−1, 1]² × [−hz, hz], outward-facing winding.
 fn slab(hz: f32) -> Primitive {

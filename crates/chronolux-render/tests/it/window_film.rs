@@ -3,7 +3,7 @@
 
 use chronolux_core::color::Rgb;
 use chronolux_core::sampling::rng::Pcg32;
-use chronolux_render::temporal::window_film::{Contribution, FILM_TILE, WindowFilm};
+use chronolux_render::framework::window_film::{Contribution, FILM_TILE, WindowFilm};
 use std::collections::BTreeMap;
 
 /// 150×100 pixels: 3×2 tiles of 64², edge tiles clipped to 22 and 36 pixels.

@@ -1,0 +1,809 @@
+//! `ic-selective`: photon mapping with an irradiance cache whose records keep their gather
+//! directions between frames and re-cast only a part of them each frame (Tawara,
+//! Myszkowski, Seidel, "Exploiting temporal coherence in final gathering for dynamic
+//! scenes", CGI 2004; summarised in Tawara et al., SCCG 2004, §3.2).
+//!
+//! ## Method (per frame `f`)
+//! Everything but the final gathering is `pm-ic`'s ([`super`]): the photon maps of frame
+//! `f` (photons `f·N ..`, or `0..N` with `fixed_photons`), the eye pass and the probe pass.
+//! Each record keeps, per stratum `(j, k)` of its `M × N` gather, a [`Stratum`]: the
+//! incident radiance, the hit distance, the instance hit and the frame it was cast in (its
+//! **age** is `f` minus that), in a [`StrataStore`] (paged on disk by default, see
+//! [`store`]). A stratum cast in frame `c` points along the direction of
+//! [`stratum_direction`] jittered by numbers hashed from `(seed, c, record id, stratum)`,
+//! and its gather ray reads frame `c`'s global map.
+//!
+//! 1. **What changed** since the previous frame rendered: [`FrameDelta::between`].
+//! 2. **Records whose own surface changed** (their instance moved or was deformed) are
+//!    dropped (their slots freed); the probe pass below makes new ones where the view
+//!    needs them — rebuilt at their new place.
+//! 3. **Records in use**: the probe points of `f` (as `pm-ic`) mark every record valid at
+//!    one of them; the others are dropped (the view no longer needs them).
+//! 4. **Refresh** of each record in use (in parallel; the store is read and written in
+//!    record order, in chunks of [`CHUNK`] records):
+//!    - **priority** strata, re-cast whatever their age: those whose hit instance changed
+//!      (moved or deformed), and those whose ray segment (record → hit, or unbounded when
+//!      nothing was hit) crosses the world box of a changed instance in the previous or
+//!      this frame (an object that moved into or out of the direction); **all** strata
+//!      when a light or a material changed ([`FrameDelta::lights_changed`]: the maps'
+//!      radiance at every hit may differ, and the kernel cannot tell which light a hit's
+//!      photons came from, so no subset is known to be unaffected; with
+//!      `recast_on_light_change = false` such changes are left to the refresh by age);
+//!    - then, up to a budget of `ceil(refresh · M·N)` strata per record (priority ones
+//!      count against it), strata chosen **by age**: the refresh probability of a stratum
+//!      is proportional to its age, and the strata are drawn without replacement with
+//!      exactly those inclusion probabilities (capped at 1) by [`select_by_age`]: strata
+//!      whose share of the budget is ≥ 1 are taken (repeatedly, as the remaining budget
+//!      shrinks), the others are put in a **random permutation** and systematic sampling
+//!      with one random offset walks the cumulative distribution of their refresh
+//!      probabilities in that permuted order (randomised systematic sampling with
+//!      probability proportional to size, Hartley & Rao 1962). This is our reading of the
+//!      paper's "CDF of refresh probability and modified random permutation", whose
+//!      exact procedure we could not consult: it refreshes the oldest strata first, a
+//!      stratum is never refreshed twice in a frame, and every stratum with age ≥ 1
+//!      keeps a non-zero chance;
+//!    - the record's irradiance, harmonic mean distance and gradients are recomputed from
+//!      all its strata ([`gather_from_strata`], Ward–Heckbert as `pm-ic`) and the record
+//!      remade with `pm-ic`'s radius limits and clamps.
+//! 5. **New records** where the probe points are not covered yet: exactly `pm-ic`'s
+//!    batched record creation ([`crate::kernels::gather::BATCH`]), every stratum cast in `f`.
+//! 6. The eye pass reads the cache as `pm-ic` does ([`CacheSource`]).
+//!
+//! All numbers are hashed from `(seed, frame, record id, stratum)` (record ids count the
+//! records made, in creation order), records are created in `pm-ic`'s deterministic
+//! batches, refreshed independently of each other and written back in record order, so
+//! images are **bit-identical for any thread count**, and for either store.
+//!
+//! ## Bias
+//! `pm-ic`'s (see [`super`]), plus **staleness**: a stratum not re-cast this frame holds
+//! the radiance of the frame it was cast in. Geometry changes along a direction (hit
+//! object moved, an object moved into or out of it) are always re-cast, so a stale
+//! stratum sees the same surface at the same distance; what it can miss is a change of
+//! the *radiance* there caused elsewhere (an object moved next to a wall it does not
+//! block: indirect shadows, colour bleeding), for about `1/refresh` frames on average.
+//! A stratum's value is one unbiased sample of its frame's incident radiance, so the
+//! error does not accumulate: after ≈ `1/refresh` frames every stratum is renewed.
+//!
+//! ## Memory
+//! In memory per record: position, normal, the record itself and bookkeeping (≈ 160
+//! bytes, plus its entries in the cache's grid, rebuilt each frame); the strata (`24 · M · N` bytes per record, 10 KiB at 12 × 36) are in the
+//! store, whose resident part is bounded by `cache_pages × page_kb` KiB with the paged
+//! store (plus one chunk of [`CHUNK`] records' strata being refreshed).
+
+pub mod store;
+
+use crate::framework::integrator::{RenderedFrame, render_camera_rays};
+use crate::kernels::gather::irradiance_cache::{
+    CacheParams, Gather, IrradianceCache, Record, gather_from_strata, make_record,
+    stratum_direction,
+};
+use crate::kernels::gather::photon_map::PhotonMap;
+use crate::kernels::gather::view::{CacheQuery, EyeView, NoIndirect};
+use crate::kernels::gather::{
+    BATCH, CacheSource, PmIcSettings, base_cell, frame_maps, gather_ray_hit, photon_base,
+    probe_points,
+};
+use chronolux_core::geometry::Bounds3;
+use chronolux_core::math::{Frame, Vec3};
+use chronolux_core::parallel;
+use chronolux_core::sampling::hash_words;
+use chronolux_core::sampling::rng::Pcg32;
+use chronolux_core::scene::delta::FrameDelta;
+use chronolux_core::scene::frame::FrameScene;
+use chronolux_core::scene::source::FrameSource;
+use std::collections::BTreeSet;
+use std::sync::Arc;
+use std::time::Instant;
+use store::{MemoryStore, PagedStore, StoreStats, StrataStore, Stratum};
+
+/// Records whose strata are read, refreshed and written back together.
+pub const CHUNK: usize = 64;
+
+/// Settings of `ic-selective`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IcSelectiveSettings {
+    /// Photon mapping, gather and cache settings (as `pm-ic`).
+    pub pmic: PmIcSettings,
+    /// Fraction of each record's strata re-cast per frame (priority strata included).
+    /// Default 0.1 (the paper's).
+    pub refresh: f32,
+    /// Keep the strata in a paged file (true) or in memory (false). Default true.
+    pub paged: bool,
+    /// Page size of the paged store, KiB (rounded down to whole records). Default 256.
+    pub page_kb: u32,
+    /// Pages of the paged store held in memory (LRU). Default 64 (16 MiB at 256 KiB).
+    pub cache_pages: u32,
+    /// Directory of the paged store's file; empty: the system's temporary directory.
+    pub store_dir: String,
+    /// Re-cast every stratum in a frame where a light or a material changed (true,
+    /// default: no stale light), or leave such changes to the refresh by age like any
+    /// other change of radiance at a hit (false: light lags by about `1/refresh` frames).
+    pub recast_on_light_change: bool,
+}
+
+impl Default for IcSelectiveSettings {
+    fn default() -> Self {
+        IcSelectiveSettings {
+            pmic: PmIcSettings::default(),
+            refresh: 0.1,
+            paged: true,
+            page_kb: 256,
+            cache_pages: 64,
+            store_dir: String::new(),
+            recast_on_light_change: true,
+        }
+    }
+}
+
+/// A record kept across frames.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SelRecord {
+    /// Creation number (hashed into its strata's numbers).
+    pub id: u64,
+    /// Where its strata are in the store.
+    pub slot: u32,
+    pub p: Vec3,
+    pub n: Vec3,
+    pub instance: u32,
+    /// Pixel footprint at creation (the radius clamps).
+    pub footprint: f32,
+    /// The record as the cache uses it (from the strata as of the last refresh).
+    pub record: Record,
+}
+
+struct State {
+    prev: Arc<FrameScene>,
+    records: Vec<SelRecord>,
+    store: Box<dyn StrataStore>,
+    free: BTreeSet<u32>,
+    next_slot: u32,
+    next_id: u64,
+}
+
+impl State {
+    fn alloc(&mut self) -> u32 {
+        if let Some(s) = self.free.pop_first() {
+            s
+        } else {
+            self.next_slot += 1;
+            self.next_slot - 1
+        }
+    }
+}
+
+/// Step 1 of a frame: what changed since the previous frame rendered, and where.
+struct Change {
+    /// Per instance: moved or deformed.
+    changed: Vec<bool>,
+    /// Lights or materials changed and `recast_on_light_change`: every stratum is stale.
+    all_stale: bool,
+    /// World boxes (previous and this frame) of the changed instances, slightly enlarged.
+    boxes: Vec<Bounds3>,
+}
+
+/// The phases of [`IcSelective::render`] that update the kept records (the module doc's
+/// steps 1 to 5), in order.
+impl State {
+    fn change_to(&self, scene: &FrameScene, recast_on_light_change: bool) -> Change {
+        let delta = FrameDelta::between(&self.prev, scene);
+        let changed = delta.dynamic_instances();
+        let all_stale =
+            recast_on_light_change && (delta.lights_changed() || delta.materials_changed());
+        let eps = scene.scene_radius.max(1e-6) * 1e-4;
+        let mut boxes = Vec::new();
+        for (i, _) in changed.iter().enumerate().filter(|(_, c)| **c) {
+            for sc in [&*self.prev, scene] {
+                let mut b = instance_box(sc, i);
+                if !b.is_empty() {
+                    b.min -= Vec3::splat(eps);
+                    b.max += Vec3::splat(eps);
+                    boxes.push(b);
+                }
+            }
+        }
+        Change {
+            changed,
+            all_stale,
+            boxes,
+        }
+    }
+
+    /// Step 2: takes the records, frees the slots of those on a changed surface and
+    /// returns the others.
+    fn drop_changed(&mut self, changed: &[bool]) -> Vec<SelRecord> {
+        let mut kept = Vec::with_capacity(self.records.len());
+        for r in std::mem::take(&mut self.records) {
+            if changed.get(r.instance as usize).copied().unwrap_or(true) {
+                self.free.insert(r.slot);
+            } else {
+                kept.push(r);
+            }
+        }
+        kept
+    }
+
+    /// Step 3: of `kept`, the records valid at one of this frame's probe `points` (the
+    /// others' slots are freed).
+    fn keep_used(
+        &mut self,
+        kept: Vec<SelRecord>,
+        points: &[(u64, CacheQuery)],
+        scene: &FrameScene,
+        s: &PmIcSettings,
+    ) -> Vec<SelRecord> {
+        let mut used = vec![false; kept.len()];
+        let mut old = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
+        for r in &kept {
+            old.insert(r.record);
+        }
+        let hits = parallel::map_chunks(points.len(), 256, |range| {
+            let mut ids = Vec::new();
+            for (_, q) in &points[range] {
+                old.for_valid_indexed(q.p, q.n, |id, _, _| ids.push(id as u32));
+            }
+            ids
+        });
+        for id in hits.into_iter().flatten() {
+            used[id as usize] = true;
+        }
+        let mut records = Vec::with_capacity(kept.len());
+        for (r, u) in kept.into_iter().zip(used) {
+            if u {
+                records.push(r);
+            } else {
+                self.free.insert(r.slot);
+            }
+        }
+        records
+    }
+
+    /// Step 4: refreshes every record's strata (read from the store in chunks of
+    /// [`CHUNK`] records, refreshed in parallel, written back); the strata counts and the
+    /// seconds spent in the store.
+    fn refresh(
+        &mut self,
+        records: &mut [SelRecord],
+        refresh: &Refresh,
+        spr: usize,
+    ) -> (Counts, f64) {
+        let mut counts = Counts::default();
+        let mut t_store = 0.0f64;
+        for start in (0..records.len()).step_by(CHUNK) {
+            let end = (start + CHUNK).min(records.len());
+            let ts = Instant::now();
+            let blocks: Vec<Vec<Stratum>> = records[start..end]
+                .iter()
+                .map(|r| {
+                    let mut b = vec![Stratum::EMPTY; spr];
+                    self.store.read(r.slot, &mut b);
+                    b
+                })
+                .collect();
+            t_store += ts.elapsed().as_secs_f64();
+            let done = parallel::map_chunks(blocks.len(), 1, |range| {
+                let i = range.start;
+                let mut b = blocks[i].clone();
+                let (rec, c) = refresh.record(&records[start + i], &mut b);
+                (b, rec, c)
+            });
+            let ts = Instant::now();
+            for (i, (b, rec, c)) in done.into_iter().enumerate() {
+                let r = &mut records[start + i];
+                self.store.write(r.slot, &b);
+                r.record = rec;
+                counts.priority += c.priority;
+                counts.aged += c.aged;
+            }
+            t_store += ts.elapsed().as_secs_f64();
+        }
+        (counts, t_store)
+    }
+
+    /// Step 5: new records at the probe points no record covers (pm-ic's batches of
+    /// [`BATCH`]), every stratum cast in this frame; the cache of all records, the number
+    /// added and the seconds spent in the store.
+    fn add_needed(
+        &mut self,
+        records: &mut Vec<SelRecord>,
+        points: &[(u64, CacheQuery)],
+        at: &Refresh,
+        spr: usize,
+    ) -> (IrradianceCache, u64, f64) {
+        let (scene, s, frame) = (at.scene, at.s, at.frame);
+        let mut t_store = 0.0f64;
+        let mut cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
+        for r in records.iter() {
+            cache.insert(r.record);
+        }
+        let mut added = 0u64;
+        for batch in points.chunks(BATCH) {
+            let need: Vec<&(u64, CacheQuery)> = batch
+                .iter()
+                .filter(|(_, q)| !cache.covers(q.p, q.n))
+                .collect();
+            if need.is_empty() {
+                continue;
+            }
+            let first_id = self.next_id;
+            self.next_id += need.len() as u64;
+            let made = parallel::map_chunks(need.len(), 1, |r| {
+                let (_, q) = need[r.start];
+                let id = first_id + r.start as u64;
+                let strata: Vec<Stratum> = (0..spr)
+                    .map(|i| cast_stratum(scene, s, at.global, q.p, q.n, id, i, frame))
+                    .collect();
+                let g = gather_of(s, id, q.n, &strata);
+                let rec = record_from(&s.cache, q.p, q.n, q.footprint, &g);
+                (id, *q, strata, rec)
+            });
+            for (id, q, strata, rec) in made {
+                let slot = self.alloc();
+                let ts = Instant::now();
+                self.store.write(slot, &strata);
+                t_store += ts.elapsed().as_secs_f64();
+                cache.insert(rec);
+                records.push(SelRecord {
+                    id,
+                    slot,
+                    p: q.p,
+                    n: q.n,
+                    instance: q.instance,
+                    footprint: q.footprint,
+                    record: rec,
+                });
+                added += 1;
+            }
+        }
+        (cache, added, t_store)
+    }
+}
+
+/// The strata store `s` asks for: in memory, or paged to a file in `store_dir` (the
+/// system's temporary folder when empty).
+fn make_store(s: &IcSelectiveSettings) -> Result<Box<dyn StrataStore>, String> {
+    let spr = (s.pmic.gather_m.max(1) * s.pmic.gather_n.max(1)) as usize;
+    if !s.paged {
+        return Ok(Box::new(MemoryStore::new(spr)));
+    }
+    let dir = (!s.store_dir.is_empty()).then(|| std::path::PathBuf::from(&s.store_dir));
+    let shown = dir.clone().unwrap_or_else(std::env::temp_dir);
+    let store = PagedStore::new(spr, s.page_kb as usize * 1024, s.cache_pages as usize, dir)
+        .map_err(|e| {
+            format!(
+                "cannot create the paged strata file in {} (store_dir): {e}",
+                shown.display()
+            )
+        })?;
+    Ok(Box::new(store))
+}
+
+/// The technique.
+pub struct IcSelective {
+    pub settings: IcSelectiveSettings,
+    pub name: &'static str,
+    state: Option<State>,
+    /// The strata store, made when the technique is built (so that a store folder that
+    /// cannot be written is an error before any frame), moved into the state by the first
+    /// frame.
+    store: Option<Box<dyn StrataStore>>,
+}
+
+/// The numbers of stratum `idx` of record `id` cast in frame `cast`: jitter in the
+/// stratum, and the stream of the gather ray's delta chain.
+fn stratum_rngs(seed: u64, cast: u32, id: u64, idx: usize) -> (f32, f32, Pcg32) {
+    let h = hash_words(&[seed, 0x7365_6c65_6374, cast as u64, id, idx as u64]);
+    let mut j = Pcg32::new(h, 0x6a69_7474);
+    let (xi, psi) = (j.next_f32(), j.next_f32());
+    (xi, psi, Pcg32::new(h, 0x6761_7468))
+}
+
+/// Direction and `tan θ` of stratum `idx` of a record at normal frame `fr`, as cast in
+/// frame `cast`.
+pub fn stratum_dir(s: &PmIcSettings, fr: &Frame, id: u64, idx: usize, cast: u32) -> (Vec3, f32) {
+    let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
+    let (xi, psi, _) = stratum_rngs(s.common.seed, cast, id, idx);
+    stratum_direction(fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi)
+}
+
+/// Casts stratum `idx` of record `id` at (p, n) in frame `frame` (reading `global`, the
+/// frame's global map).
+#[allow(clippy::too_many_arguments)]
+pub fn cast_stratum(
+    scene: &FrameScene,
+    s: &PmIcSettings,
+    global: &PhotonMap,
+    p: Vec3,
+    n: Vec3,
+    id: u64,
+    idx: usize,
+    frame: u32,
+) -> Stratum {
+    let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
+    let (xi, psi, mut rng) = stratum_rngs(s.common.seed, frame, id, idx);
+    let fr = Frame::from_normal(n);
+    let (dir, _) = stratum_direction(&fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi);
+    match gather_ray_hit(scene, s, &[global], p, n, dir, &mut rng) {
+        Some((l, d, inst)) => Stratum {
+            l,
+            dist: d.max(1e-6),
+            hit: inst,
+            cast: frame,
+        },
+        None => Stratum {
+            cast: frame,
+            ..Stratum::EMPTY
+        },
+    }
+}
+
+/// The gather (irradiance, distances, gradients) of a record's strata.
+pub fn gather_of(s: &PmIcSettings, id: u64, n: Vec3, strata: &[Stratum]) -> Gather {
+    let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
+    let fr = Frame::from_normal(n);
+    let l: Vec<_> = strata.iter().map(|t| t.l).collect();
+    let r: Vec<_> = strata.iter().map(|t| t.dist).collect();
+    let tan: Vec<_> = strata
+        .iter()
+        .enumerate()
+        .map(|(i, t)| stratum_dir(s, &fr, id, i, t.cast).1)
+        .collect();
+    gather_from_strata(&fr, m, np, &l, &r, &tan)
+}
+
+fn record_from(params: &CacheParams, p: Vec3, n: Vec3, footprint: f32, g: &Gather) -> Record {
+    let a = params.accuracy.max(1e-6);
+    make_record(
+        p,
+        n,
+        g,
+        params.r_min_px * footprint / a,
+        params.r_max_px * footprint / a,
+    )
+}
+
+/// Chooses `n` distinct indices of `weights` (those with weight > 0; all of them if there
+/// are at most `n`), each with inclusion probability `min(1, c·w)` (`c` such that the
+/// probabilities add up to `n`): indices whose share is ≥ 1 are taken first (repeatedly,
+/// the largest first when there are more than the budget), the rest by systematic
+/// sampling along a random permutation (see the module doc). Returned in increasing
+/// order.
+pub fn select_by_age(weights: &[f64], n: usize, rng: &mut Pcg32) -> Vec<usize> {
+    let mut rest: Vec<usize> = (0..weights.len()).filter(|&k| weights[k] > 0.0).collect();
+    if n >= rest.len() {
+        return rest;
+    }
+    let mut chosen = Vec::with_capacity(n);
+    loop {
+        let left = n - chosen.len();
+        if left == 0 {
+            chosen.sort_unstable();
+            return chosen;
+        }
+        let total: f64 = rest.iter().map(|&k| weights[k]).sum();
+        let (mut sure, other): (Vec<usize>, Vec<usize>) = rest
+            .iter()
+            .partition(|&&k| left as f64 * weights[k] >= total);
+        if sure.is_empty() {
+            break;
+        }
+        if sure.len() >= left {
+            sure.sort_by(|&a, &b| weights[b].total_cmp(&weights[a]).then(a.cmp(&b)));
+            chosen.extend_from_slice(&sure[..left]);
+            chosen.sort_unstable();
+            return chosen;
+        }
+        chosen.extend(sure);
+        rest = other;
+    }
+    for i in (1..rest.len()).rev() {
+        let j = ((rng.next_u32() as u64 * (i as u64 + 1)) >> 32) as usize;
+        rest.swap(i, j);
+    }
+    let left = n - chosen.len();
+    let total: f64 = rest.iter().map(|&k| weights[k]).sum();
+    let step = total / left as f64;
+    let mut u = rng.next_f32() as f64 * step;
+    let mut cum = 0.0f64;
+    let mut picked = 0;
+    for &k in &rest {
+        cum += weights[k];
+        // Every weight is below `step`, so at most one target falls in each interval.
+        if picked < left && u < cum {
+            chosen.push(k);
+            picked += 1;
+            u += step;
+        }
+    }
+    chosen.sort_unstable();
+    chosen
+}
+
+/// World box of instance `i` of `scene` (empty if absent).
+fn instance_box(scene: &FrameScene, i: usize) -> Bounds3 {
+    let mut out = Bounds3::EMPTY;
+    let Some(inst) = scene.accel.instances().get(i) else {
+        return out;
+    };
+    let b = inst.blas.bounds;
+    if b.is_empty() {
+        return out;
+    }
+    for k in 0..8 {
+        let c = Vec3::new(
+            if k & 1 == 0 { b.min.x } else { b.max.x },
+            if k & 2 == 0 { b.min.y } else { b.max.y },
+            if k & 4 == 0 { b.min.z } else { b.max.z },
+        );
+        out.grow(inst.world_from_object.transform_point3(c));
+    }
+    out
+}
+
+/// Whether the segment `o + t·d`, `t ∈ [0, t_max]`, meets box `b` (slab test).
+fn segment_meets(b: &Bounds3, o: Vec3, d: Vec3, t_max: f32) -> bool {
+    let (mut t0, mut t1) = (0.0f32, t_max);
+    for a in 0..3 {
+        let (lo, hi, oa, da) = (b.min[a], b.max[a], o[a], d[a]);
+        if da.abs() < 1e-12 {
+            if oa < lo || oa > hi {
+                return false;
+            }
+            continue;
+        }
+        let inv = 1.0 / da;
+        let (mut ta, mut tb) = ((lo - oa) * inv, (hi - oa) * inv);
+        if ta > tb {
+            std::mem::swap(&mut ta, &mut tb);
+        }
+        t0 = t0.max(ta);
+        t1 = t1.min(tb);
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
+}
+
+/// What a frame's refresh needs to know.
+struct Refresh<'a> {
+    scene: &'a FrameScene,
+    s: &'a PmIcSettings,
+    global: &'a PhotonMap,
+    frame: u32,
+    /// Per instance: changed since the previous frame.
+    changed: &'a [bool],
+    /// Boxes (previous and this frame) of the changed instances, slightly enlarged.
+    boxes: &'a [Bounds3],
+    all_stale: bool,
+    budget: usize,
+}
+
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    priority: u64,
+    aged: u64,
+}
+
+impl Refresh<'_> {
+    fn record(&self, r: &SelRecord, strata: &mut [Stratum]) -> (Record, Counts) {
+        let s = self.s;
+        let fr = Frame::from_normal(r.n);
+        let mut recast = vec![false; strata.len()];
+        let mut counts = Counts::default();
+        for (i, t) in strata.iter().enumerate() {
+            let prio = self.all_stale
+                || (t.hit != Stratum::NO_HIT
+                    && self.changed.get(t.hit as usize).copied().unwrap_or(true))
+                || (!self.boxes.is_empty() && {
+                    let (d, _) = stratum_dir(s, &fr, r.id, i, t.cast);
+                    self.boxes.iter().any(|b| segment_meets(b, r.p, d, t.dist))
+                });
+            if prio {
+                recast[i] = true;
+                counts.priority += 1;
+            }
+        }
+        let left = self.budget.saturating_sub(counts.priority as usize);
+        if left > 0 {
+            let w: Vec<f64> = strata
+                .iter()
+                .zip(&recast)
+                .map(|(t, &p)| {
+                    if p {
+                        0.0
+                    } else {
+                        self.frame.saturating_sub(t.cast) as f64
+                    }
+                })
+                .collect();
+            let mut rng = Pcg32::new(
+                hash_words(&[s.common.seed, 0x6167_6573, self.frame as u64, r.id]),
+                0x7065_726d,
+            );
+            for k in select_by_age(&w, left, &mut rng) {
+                recast[k] = true;
+                counts.aged += 1;
+            }
+        }
+        for (i, t) in strata.iter_mut().enumerate() {
+            if recast[i] {
+                *t = cast_stratum(self.scene, s, self.global, r.p, r.n, r.id, i, self.frame);
+            }
+        }
+        let g = gather_of(s, r.id, r.n, strata);
+        (record_from(&s.cache, r.p, r.n, r.footprint, &g), counts)
+    }
+}
+
+impl IcSelective {
+    /// The technique with its strata store; an error names the store folder that cannot
+    /// hold the paged store's file.
+    pub fn new(settings: IcSelectiveSettings, name: &'static str) -> Result<Self, String> {
+        let store = Some(make_store(&settings)?);
+        Ok(IcSelective {
+            settings,
+            name,
+            state: None,
+            store,
+        })
+    }
+
+    /// The records kept now (after the last frame rendered), in cache order.
+    pub fn records(&self) -> &[SelRecord] {
+        self.state.as_ref().map_or(&[], |st| &st.records)
+    }
+
+    /// The strata of record `index` of [`IcSelective::records`].
+    pub fn strata(&mut self, index: usize) -> Vec<Stratum> {
+        let st = self.state.as_mut().expect("a frame was rendered");
+        let mut out = vec![Stratum::EMPTY; st.store.strata_per_record()];
+        st.store.read(st.records[index].slot, &mut out);
+        out
+    }
+
+    /// Traffic of the store so far.
+    pub fn store_stats(&self) -> StoreStats {
+        self.state
+            .as_ref()
+            .map(|st| st.store.stats())
+            .unwrap_or_default()
+    }
+
+    /// Renders frame `frame` (scenes from `source`).
+    pub fn render(
+        &mut self,
+        source: &mut FrameSource,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        let t0 = Instant::now();
+        let scene_arc = source.frame(frame);
+        let scene = &*scene_arc;
+        let s = self.settings.pmic.clone();
+        let spr = (s.gather_m.max(1) * s.gather_n.max(1)) as usize;
+        let budget = (self.settings.refresh.clamp(0.0, 1.0) as f64 * spr as f64).ceil() as usize;
+        if self.state.is_none() {
+            let store = self
+                .store
+                .take()
+                .expect("the store is made once, with the technique");
+            self.state = Some(State {
+                prev: scene_arc.clone(),
+                records: Vec::new(),
+                store,
+                free: BTreeSet::new(),
+                next_slot: 0,
+                next_id: 0,
+            });
+        }
+        let st = self.state.as_mut().expect("state made");
+        // 1. What changed since the previous frame rendered, and where.
+        let change = st.change_to(scene, self.settings.recast_on_light_change);
+        let maps = frame_maps(scene, &s, photon_base(&s, frame));
+        let t_photons = t0.elapsed().as_secs_f64();
+        let before = st.records.len();
+        // 2. Records on a changed surface are rebuilt (dropped here, made anew below).
+        let kept = st.drop_changed(&change.changed);
+        let rebuilt = before - kept.len();
+        // 3. Records in use: valid at a probe point of this frame.
+        let key = hash_words(&[s.common.seed, photon_base(&s, frame), 0x6963]);
+        let probe_src = NoIndirect;
+        let probe_view = EyeView::new(&s, scene, &maps.caustic, &probe_src);
+        let points = probe_points(&probe_view, scene, key);
+        let mut records = st.keep_used(kept, &points, scene, &s);
+        let unused = before - rebuilt - records.len();
+        // 4. Refresh.
+        let refresh = Refresh {
+            scene,
+            s: &s,
+            global: &maps.global,
+            frame,
+            changed: &change.changed,
+            boxes: &change.boxes,
+            all_stale: change.all_stale,
+            budget,
+        };
+        let (counts, mut t_store) = st.refresh(&mut records, &refresh, spr);
+        let refreshed = records.len();
+        // 5. New records where the view needs them (pm-ic's batches).
+        let (cache, added, t_add) = st.add_needed(&mut records, &points, &refresh, spr);
+        t_store += t_add;
+        let all_stale = change.all_stale;
+        st.records = records;
+        st.prev = scene_arc.clone();
+        let t_cache = t0.elapsed().as_secs_f64() - t_photons;
+
+        let src = CacheSource {
+            settings: &s,
+            cache: &cache,
+            global: &maps.global,
+            unstored: Default::default(),
+        };
+        let eye = EyeView::new(&s, scene, &maps.caustic, &src);
+        let mut out = render_camera_rays(&eye, scene, frame, s.common.spp, s.common.seed, progress);
+        out.stats.rays += maps.rays;
+        let stats = st.store.stats();
+        let r = &mut out.report;
+        r.insert("photons".into(), s.photons.into());
+        r.insert("cache_records".into(), st.records.len().into());
+        r.insert("records_added".into(), added.into());
+        r.insert("records_rebuilt".into(), rebuilt.into());
+        r.insert("records_unused_dropped".into(), unused.into());
+        r.insert("records_refreshed".into(), refreshed.into());
+        r.insert("strata_priority".into(), counts.priority.into());
+        r.insert("strata_by_age".into(), counts.aged.into());
+        r.insert(
+            "strata_cast".into(),
+            (counts.priority + counts.aged + added * spr as u64).into(),
+        );
+        r.insert("lights_or_materials_changed".into(), all_stale.into());
+        r.insert("unstored_gathers".into(), src.unstored.into_inner().into());
+        r.insert("seconds_photons".into(), t_photons.into());
+        r.insert("seconds_cache".into(), t_cache.into());
+        r.insert("seconds_store".into(), t_store.into());
+        r.insert(
+            "store".into(),
+            serde_json::to_value(stats).expect("stats serialise"),
+        );
+        out
+    }
+}
+
+impl crate::framework::sequence::SequenceRenderer for IcSelective {
+    fn name(&self) -> &'static str {
+        self.name
+    }
+
+    fn render_frame(
+        &mut self,
+        source: &mut FrameSource,
+        frame: u32,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> RenderedFrame {
+        self.render(source, frame, progress)
+    }
+}
+
+/// Registry entry of `ic-selective`.
+pub static TECHNIQUE: crate::framework::technique::Preset<IcSelectiveSettings> =
+    crate::framework::technique::Preset {
+        name: "ic-selective",
+        summary: "photon mapping with an irradiance cache whose records keep their gather directions (radiance, distance, hit, age) in a paged store and re-cast per frame those that a change reached plus a fraction chosen by age (Tawara et al. 2004)",
+        capabilities: crate::framework::technique::Capabilities {
+            motion_blur: false,
+            photons: false,
+            window: false,
+            max_depth: false,
+            stateless: false,
+            effort: crate::framework::technique::Effort {
+                key: "photons",
+                per_unit: 1000,
+                unit: "thousand photons per map and frame",
+            },
+        },
+        quality: &[],
+        defaults: IcSelectiveSettings::default,
+        common: |s| &mut s.pmic.common,
+        build: |s, _, name| Ok(Box::new(IcSelective::new(s, name)?)),
+    };

@@ -44,7 +44,7 @@ impl crate::framework::sequence::SequenceRenderer for DeptSequence {
         out
     }
 
-    /// Direct light per pixel, indirect from the elements ([`view`]).
+    /// Direct light per pixel, indirect from the elements ([`crate::kernels::elements::view`]).
     fn separates_light(&self) -> bool {
         true
     }

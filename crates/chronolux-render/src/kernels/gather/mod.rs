@@ -1,6 +1,6 @@
 //! Photon mapping with final gathering and an irradiance cache, frame by frame
 //! (`pm-ic`, Jensen 1996/2001 with Ward's cache), and its temporal variant with static and
-//! dynamic photons and caches ([`static_dynamic`], `ic-static-dynamic`, Tawara,
+//! dynamic photons and caches ([`crate::techniques::ic_static_dynamic`], `ic-static-dynamic`, Tawara,
 //! Myszkowski, Seidel 2002/2004).
 //!
 //! ## Method (per frame)
@@ -18,7 +18,7 @@
 //!    diffuse base) continues the path by BSDF sampling (up to `max_glossy_depth`); a
 //!    delta lobe continues the chain; at the first other non-delta vertex the indirect
 //!    diffuse light is `β · f_sample · E(x)/π`, with `E` from the irradiance cache.
-//! 3. **Irradiance cache** ([`cache`]): records made by **final gathering** (M×N
+//! 3. **Irradiance cache** ([`irradiance_cache`]): records made by **final gathering** (M×N
 //!    stratified cosine-weighted hemisphere; each gather ray follows delta chains without
 //!    counting emission, and reads the global map's radiance estimate at its first
 //!    non-delta hit), with harmonic mean distance and Ward–Heckbert gradients,
@@ -46,7 +46,7 @@
 //!   from a surface at distance `R`, the worst regular case, the plane test's
 //!   `E = I h/(h²+r²)^{3/2}` with `R = h`) that is `≤ 1.5 a² E` (6 % of E at a = 0.2);
 //!   the interpolation is a convex combination of such extrapolations, so it is bounded
-//!   by the same. `R` is clamped (see [`cache`]): the lower clamp (validity radius at
+//!   by the same. `R` is clamped (see [`irradiance_cache`]): the lower clamp (validity radius at
 //!   least one pixel) enlarges records in corners, where `E` varies fastest — the
 //!   bound then holds with `R` the clamped radius, i.e. at pixel scale.
 //! - **density estimation at gather hits**: the global map's kernel blurs the outgoing

@@ -43,7 +43,7 @@ pub(super) struct Entry {
     pub(super) continuation: bool,
     /// Window frames in which the entry's shadow ray is unoccluded.
     pub(super) vis: FrameMask,
-    /// Its MIS weight split by what depends on the camera ([`view_split`]), kept when
+    /// Its MIS weight split by what depends on the camera ([`view_split`](crate::kernels::bdpt::connect::view_split)), kept when
     /// light tracing is on and a window frame has another camera: a frame g with another
     /// camera re-weights the entry for it (module doc, "MIS weights in another frame").
     pub(super) split: Option<ViewSplit>,

@@ -11,7 +11,7 @@
 //!   fixed display level.
 //! - [`read_png_rgb8`]: 8-bit PNGs back, for tests and comparisons.
 //!
-//! Every write goes through [`crate::output::write_atomic`]: a reader never sees a half-written
+//! Every write goes through [`crate::atomic::write_atomic`]: a reader never sees a half-written
 //! file under the final name.
 
 use std::fs::File;
@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 
 use chronolux_core::color::{Rgb, linear_to_srgb, srgb_to_linear};
 
-use crate::output::write_atomic;
+use crate::atomic::write_atomic;
 
 /// Errors of image reading and writing. Every variant names the file.
 #[derive(Debug, thiserror::Error)]

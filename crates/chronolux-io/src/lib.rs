@@ -2,8 +2,10 @@
 //!
 //! Bytes ↔ values, no light transport: glTF 2.0 scenes with animation into
 //! [`chronolux_core::scene::desc::SceneDesc`] ([`gltf`]), images out and reference images in
-//! ([`image`]), and frame sequences on disk with their manifest ([`output`]).
+//! ([`image`]), and frame sequences on disk with their manifest ([`output`]); every file is
+//! written through [`atomic`].
 
+pub mod atomic;
 pub mod gltf;
 pub mod image;
 pub mod output;

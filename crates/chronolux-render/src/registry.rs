@@ -20,18 +20,56 @@ use serde_json::Value;
 
 /// Every technique, in the order `--help` lists them.
 pub static TECHNIQUES: &[&dyn Technique] = &[
-    &crate::techniques::path::TECHNIQUE,
-    &crate::techniques::bdpt::TECHNIQUE,
-    &crate::techniques::dept::TECHNIQUE,
-    &crate::techniques::dept::SPATIAL,
-    &crate::techniques::dept::BILATERAL,
-    &crate::techniques::stbpt::TECHNIQUE,
-    &crate::techniques::spacetime_dept::TECHNIQUE,
-    &crate::techniques::pm_ic::TECHNIQUE,
-    &crate::techniques::ic_static_dynamic::TECHNIQUE,
-    &crate::techniques::ic_selective::TECHNIQUE,
-    &crate::techniques::spt::TECHNIQUE,
+    &Listed(&crate::techniques::path::TECHNIQUE),
+    &Listed(&crate::techniques::bdpt::TECHNIQUE),
+    &Listed(&crate::techniques::dept::TECHNIQUE),
+    &Listed(&crate::techniques::dept::SPATIAL),
+    &Listed(&crate::techniques::dept::BILATERAL),
+    &Listed(&crate::techniques::stbpt::TECHNIQUE),
+    &Listed(&crate::techniques::spacetime_dept::TECHNIQUE),
+    &Listed(&crate::techniques::pm_ic::TECHNIQUE),
+    &Listed(&crate::techniques::ic_static_dynamic::TECHNIQUE),
+    &Listed(&crate::techniques::ic_selective::TECHNIQUE),
+    &Listed(&crate::techniques::spt::TECHNIQUE),
 ];
+
+/// A technique as the list hands it out: itself, with its refusal of a capability it lacks
+/// ([`LACKS_MAX_DEPTH`], [`LACKS_SHUTTER`]) completed by the techniques that have it. The
+/// framework refuses (one rule, in [`Preset`]) but cannot name them: it sits below the
+/// techniques. Every caller gets techniques from this list, so every refusal names them.
+pub struct Listed(pub &'static dyn Technique);
+
+impl Technique for Listed {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn summary(&self) -> &'static str {
+        self.0.summary()
+    }
+    fn capabilities(&self) -> Capabilities {
+        self.0.capabilities()
+    }
+    fn quality(&self) -> &'static [QualityLevel] {
+        self.0.quality()
+    }
+    fn defaults(&self) -> Value {
+        self.0.defaults()
+    }
+    fn check(&self, settings: &Value) -> Result<Value, String> {
+        self.0.check(settings).map_err(name_alternatives)
+    }
+    fn common(&self, settings: &Value) -> Result<CommonSettings, String> {
+        self.0.common(settings).map_err(name_alternatives)
+    }
+    fn with_common(&self, settings: &Value, common: CommonSettings) -> Result<Value, String> {
+        self.0
+            .with_common(settings, common)
+            .map_err(name_alternatives)
+    }
+    fn build(&self, settings: &Value, ctx: &BuildContext) -> Result<Renderer, String> {
+        self.0.build(settings, ctx).map_err(name_alternatives)
+    }
+}
 
 /// The technique `render` uses when no `--method` is given: `spacetime-dept`, the one the
 /// equal-quality benchmarks (BENCHMARKS.md, "spacetime-dept against stbpt, each at its
@@ -76,6 +114,22 @@ pub fn names_where(f: impl Fn(&Capabilities) -> bool) -> Vec<&'static str> {
         .filter(|t| f(&t.capabilities()))
         .map(|t| t.name())
         .collect()
+}
+
+/// Appends to a framework refusal of a capability ([`LACKS_MAX_DEPTH`], [`LACKS_SHUTTER`])
+/// the techniques that have it: only this list knows them.
+fn name_alternatives(e: String) -> String {
+    if e.contains("(it is for: ") {
+        return e;
+    }
+    let having = if e.contains(LACKS_MAX_DEPTH) {
+        names_where(|c| c.max_depth)
+    } else if e.contains(LACKS_SHUTTER) {
+        names_where(|c| c.motion_blur)
+    } else {
+        return e;
+    };
+    format!("{e} (it is for: {})", having.join(", "))
 }
 
 /// `--help` text: one line per technique.
@@ -327,5 +381,33 @@ mod tests {
         let plain = find("dept").unwrap();
         let s = resolve(plain, None, &[("filter".into(), spatial["filter"].clone())]).unwrap();
         assert_eq!(s, spatial);
+    }
+
+    /// A capability a technique lacks is refused by the framework and, through the list,
+    /// the refusal names every technique that has it (from the capabilities, so it stays
+    /// right when a technique gains one).
+    #[test]
+    fn a_refused_capability_names_the_techniques_that_have_it() {
+        let depth = names_where(|c| c.max_depth).join(", ");
+        let blur = names_where(|c| c.motion_blur).join(", ");
+        for t in TECHNIQUES {
+            let caps = t.capabilities();
+            let sets = [("max_depth".to_string(), Value::from(3))];
+            match resolve(*t, None, &sets) {
+                Ok(_) => assert!(caps.max_depth, "{}", t.name()),
+                Err(e) => {
+                    assert!(!caps.max_depth, "{}: {e}", t.name());
+                    assert!(e.contains(LACKS_MAX_DEPTH) && e.contains(&depth), "{e}");
+                }
+            }
+            let ctx = BuildContext { shutter: 0.5 };
+            match t.build(&t.defaults(), &ctx) {
+                Ok(_) => assert!(caps.motion_blur, "{}", t.name()),
+                Err(e) => {
+                    assert!(!caps.motion_blur, "{}: {e}", t.name());
+                    assert!(e.contains(LACKS_SHUTTER) && e.contains(&blur), "{e}");
+                }
+            }
+        }
     }
 }

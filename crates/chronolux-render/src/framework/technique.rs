@@ -189,7 +189,7 @@ where
             && !self.capabilities.max_depth
         {
             return Err(format!(
-                "settings of --method {}: max_depth = {d}: a path depth is not implemented for it (`chronolux render --help`, under --max-depth, names the methods that honour one)",
+                "settings of --method {}: max_depth = {d}: {LACKS_MAX_DEPTH}",
                 self.name
             ));
         }
@@ -231,10 +231,7 @@ where
     }
     fn build(&self, settings: &Value, ctx: &BuildContext) -> Result<Renderer, String> {
         if ctx.shutter != 0.0 && !self.capabilities.motion_blur {
-            return Err(format!(
-                "--shutter (motion blur) is not implemented for --method {} (`chronolux render --help`, under --shutter, names the methods that have it)",
-                self.name
-            ));
+            return Err(format!("--shutter {LACKS_SHUTTER} {}", self.name));
         }
         check_shutter(ctx.shutter)?;
         (self.build)(self.parse(settings)?, ctx, self.name)
@@ -425,6 +422,15 @@ pub fn set_key(settings: &mut Value, key: &str, value: Value) -> Result<(), Stri
     m.insert(parts[parts.len() - 1].to_string(), value);
     Ok(())
 }
+
+/// The refusal of a depth limit by a technique without one ([`Capabilities::max_depth`]).
+/// The framework cannot name the techniques that have one (it sits below their list); the
+/// registry's list hands out each technique wrapped so that it adds them to any error
+/// carrying this text.
+pub const LACKS_MAX_DEPTH: &str = "a path depth is not implemented for it";
+/// The refusal of a shutter by a technique without motion blur
+/// ([`Capabilities::motion_blur`]); as [`LACKS_MAX_DEPTH`], completed by the registry.
+pub const LACKS_SHUTTER: &str = "(motion blur) is not implemented for --method";
 
 /// The settings of `technique` from its defaults, then `config` (a partial settings
 /// object, e.g. from `--config`), then each `(key, value)` of `sets` in order; checked and

@@ -14,7 +14,7 @@
 //! Rounds are interleaved (every measurement once per round) and medians reported, because
 //! the machines we measure on are shared.
 
-use crate::cli::SceneArgs;
+use crate::args::SceneArgs;
 use crate::render::{parse_frames, parse_resolution};
 use crate::scene_input;
 use anyhow::{Context, Result, bail};

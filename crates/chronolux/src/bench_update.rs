@@ -25,7 +25,7 @@
 //! ([`FrameBuilder::with_movable`]: their own instances, not the static geometry), so A
 //! and B have the same instances and elements and [`FrameDelta`] reports only them.
 
-use crate::cli::SceneArgs;
+use crate::args::SceneArgs;
 use crate::scene_input;
 use anyhow::{Context, Result, bail};
 use chronolux_core::color::{Rgb, luminance};

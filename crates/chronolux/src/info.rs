@@ -1,11 +1,22 @@
 //! `chronolux info`: what a scene contains.
 
-use crate::cli::InfoArgs;
+use crate::args::SceneArgs;
 use crate::scene_input::{self, SceneInput};
 use anyhow::Result;
 use chronolux_core::scene::anim;
 use chronolux_core::scene::desc::{ChannelTarget, Projection};
+use clap::Args;
 use serde::Serialize;
+
+/// `chronolux info`: the scene and the output format.
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
 
 #[derive(Serialize)]
 pub struct AnimationSummary {

@@ -1,5 +1,6 @@
 //! `chronolux`: the command line. Arguments and wiring only; no algorithms live here.
 
+mod args;
 mod bench;
 mod cli;
 mod compare;
@@ -12,6 +13,7 @@ mod quality;
 mod reference;
 mod render;
 mod scene_input;
+mod segment;
 mod view;
 
 use clap::Parser;
@@ -107,6 +109,10 @@ fn run_cli() {
         })
         .init();
     let result = match args.command {
+        // A farm segment (`render --plan P --segment I`) runs the plan's configuration.
+        cli::Command::Render(r) if r.plan.is_some() || r.segment.is_some() => {
+            farm::render_segment(r)
+        }
         cli::Command::Render(r) => render::run(r),
         cli::Command::Info(i) => info::run(i),
         cli::Command::Compare(c) => compare::run(c),

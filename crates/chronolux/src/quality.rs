@@ -11,7 +11,7 @@
 //! `chronolux_core::metrics`) is reported beside it. The ratio baseline time / method time
 //! is the speed-up.
 
-use crate::cli::SceneArgs;
+use crate::args::SceneArgs;
 use crate::config::{CommonFlags, FlagSetting, parse_sets, technique_settings};
 use crate::render::{parse_frames, parse_resolution};
 use crate::scene_input;

@@ -31,7 +31,7 @@
 //! `spp` (total over both halves), `rounds`, `error_estimate`, `target_error` and
 //! `converged`.
 
-use crate::cli::SceneArgs;
+use crate::args::SceneArgs;
 use crate::render::{last_frame, parse_frames, parse_resolution};
 use crate::scene_input;
 use anyhow::{Result, bail};

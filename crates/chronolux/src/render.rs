@@ -1,6 +1,6 @@
 //! `chronolux render`: load → frame builder → technique → frames on disk.
 
-use crate::cli::{RenderArgs, SceneArgs};
+use crate::args::{RenderArgs, SceneArgs};
 use crate::config::{
     CommonFlags, ConfigFile, FlagSetting, RunConfig, parse_sets, technique_settings,
 };
@@ -110,9 +110,6 @@ pub fn default_resolution(desc: &SceneDesc, camera: &CameraChoice) -> (u32, u32)
 }
 
 pub fn run(args: RenderArgs) -> Result<()> {
-    if args.plan.is_some() || args.segment.is_some() {
-        return crate::farm::render_segment(args);
-    }
     let (config, input, denoise_skipped) = resolve(&args)?;
     execute(
         &config,
@@ -135,7 +132,7 @@ pub struct Exec {
     pub no_preview: bool,
     pub threads: Option<usize>,
     /// A farm segment: only its own frames are written, with its own manifest.
-    pub segment: Option<crate::farm::SegmentRun>,
+    pub segment: Option<crate::segment::SegmentRun>,
     /// Why the frames are not denoised although nothing said not to (the denoiser
     /// cannot be had here): said once and recorded in run.json.
     pub denoise_skipped: Option<String>,
@@ -448,7 +445,7 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
             registry::frame_context(tech, &config.technique).render_before,
         ),
     };
-    let warm_up_until = crate::farm::warm_up_until(owned, render_before, done, exec.resume);
+    let warm_up_until = crate::segment::warm_up_until(owned, render_before, done, exec.resume);
     if exec.resume
         && exec.segment.is_none()
         && let Some(u) = warm_up_until
@@ -756,7 +753,7 @@ impl run::FrameSink for Progress {
 }
 
 /// Records in a segment's manifest which segment it is.
-fn settings_json_segment(settings: &mut serde_json::Value, seg: &crate::farm::SegmentRun) {
+fn settings_json_segment(settings: &mut serde_json::Value, seg: &crate::segment::SegmentRun) {
     settings["segment"] = serde_json::json!({
         "index": seg.index,
         "owned": seg.owned,

@@ -1,6 +1,6 @@
 //! Loading the scene a command names (or the built-in demo), with the stage applied.
 
-use crate::cli::SceneArgs;
+use crate::args::SceneArgs;
 use anyhow::{Context, Result, bail};
 use chronolux_core::scene::desc::{AnimationId, CameraDesc, SceneDesc};
 use chronolux_core::scene::frame::CameraChoice;

@@ -1,6 +1,6 @@
 //! `chronolux view`: the live viewer (the `chronolux-view` crate) behind the command line.
 
-use crate::cli::SceneArgs;
+use crate::args::SceneArgs;
 use crate::{render, scene_input};
 use anyhow::{Context, Result, bail};
 use chronolux_view::{DEFAULT_BIND, EditableScene, ViewOptions};

@@ -262,6 +262,147 @@ pub(super) struct TileOut {
     pub(super) counts: Counts,
 }
 
+impl TileOut {
+    /// Empty, for a window of `n` frames.
+    fn new(n: usize) -> Self {
+        TileOut {
+            batch: Vec::new(),
+            squares: Vec::new(),
+            splats: Vec::new(),
+            blur: Default::default(),
+            landings: Vec::new(),
+            stats: vec![Stats::default(); n],
+            counts: Counts::new(n),
+            pilot: Vec::new(),
+            pilot_splats: Vec::new(),
+            unreachable: 0.0,
+            reachable: 0.0,
+            shares: [0.0; 3],
+            pilot_cost: [0.0; 2],
+            pilot_n: 0,
+            other_cost: 0.0,
+            other_n: 0,
+        }
+    }
+}
+
+/// The sums of one generated frame's tiles, in tile order: per window frame its counts
+/// and ray statistics, and the pilot measurement at f.
+struct Totals {
+    counts: Counts,
+    stats: Vec<Stats>,
+    pilot: Pilot,
+}
+
+impl Totals {
+    /// Adds one tile's output (generated in frame `f`); `rho` and `rho_measured` are the
+    /// shares of f's pixels whose samples use all strategies / are measured.
+    fn add(&mut self, r: &TileOut, f: u32, rho: f64, rho_measured: f64) {
+        let pilot = &mut self.pilot;
+        self.counts.add(&r.counts);
+        for (a, b) in self.stats.iter_mut().zip(&r.stats) {
+            *a += *b;
+        }
+        for &(pixel, b, p, m) in &r.pilot {
+            pilot.add_sample(pixel, b, p, m);
+        }
+        for &(pixel, m) in &r.pilot_splats {
+            pilot.moment[pixel as usize] += m / rho_measured;
+        }
+        pilot.unreachable += r.unreachable;
+        pilot.reachable += r.reachable;
+        for (a, b) in pilot.shares.iter_mut().zip(r.shares) {
+            *a += b;
+        }
+        pilot.cost_bdpt += r.pilot_cost[0];
+        pilot.cost_path += r.pilot_cost[1];
+        pilot.samples += r.pilot_n;
+        pilot.other_cost += r.other_cost;
+        pilot.other_samples += r.other_n;
+        // Splats come from a share rho of the samples' light subpaths: scaled to what
+        // every sample's would give.
+        for c in r.splats.iter().filter(|c| c.splat && c.frame == f) {
+            pilot.splat_sq[c.pixel as usize] += luminance(c.value).powi(2) / rho;
+        }
+    }
+}
+
+/// What differs between f and each frame of its window (and, for motion blur, between
+/// neighbouring frames): every decision of the samples about the scene is read from
+/// these.
+struct WindowChanges {
+    from_f: Vec<FrameDelta>,
+    steps: Vec<FrameDelta>,
+    /// Frames with f's lights (and scene bounds), f's materials, f's camera.
+    lights_same: FrameMask,
+    materials_same: FrameMask,
+    same_camera: FrameMask,
+}
+
+impl WindowChanges {
+    fn new(scenes: &[Arc<FrameScene>], jf: usize, blur: bool) -> Self {
+        let from_f: Vec<FrameDelta> = scenes
+            .iter()
+            .map(|s| FrameDelta::between(&scenes[jf], s))
+            .collect();
+        let steps: Vec<FrameDelta> = if blur {
+            scenes
+                .windows(2)
+                .map(|w| FrameDelta::between(&w[0], &w[1]))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let mut lights_same: FrameMask = 0;
+        let mut materials_same: FrameMask = 0;
+        let mut same_camera: FrameMask = 0;
+        for (j, d) in from_f.iter().enumerate() {
+            // Light subpaths and light samples depend on the lights and, through lights
+            // at infinity, on the scene's bounding sphere; a change of the bounds counts
+            // in any case (conservative where no light is at infinity).
+            if !(d.lights_changed() || d.bounds_changed()) {
+                lights_same |= 1 << j;
+            }
+            if !d.materials_changed() {
+                materials_same |= 1 << j;
+            }
+            if !d.camera_changed() {
+                same_camera |= 1 << j;
+            }
+        }
+        WindowChanges {
+            from_f,
+            steps,
+            lights_same,
+            materials_same,
+            same_camera,
+        }
+    }
+}
+
+/// The pixels generating samples, and of all of f's `w × h` pixels (not of the generating
+/// ones) the shares whose samples use all strategies and are measured: they normalise
+/// per-pixel sums of light subpaths over the whole image.
+fn pixel_shares(
+    w: u32,
+    h: u32,
+    gen_at: impl Fn(u32, u32) -> bool,
+    all_at: impl Fn(u32, u32) -> bool,
+    measured_at: impl Fn(u32, u32) -> bool,
+) -> (usize, f64, f64) {
+    let (mut generating, mut with_all, mut measured) = (0usize, 0usize, 0usize);
+    for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
+        if gen_at(x, y) {
+            generating += 1;
+            with_all += usize::from(all_at(x, y));
+            measured += usize::from(measured_at(x, y));
+        }
+    }
+    let rho = with_all as f64 / (w as f64 * h as f64).max(1.0);
+    let rho_measured = measured as f64 / (w as f64 * h as f64).max(1.0);
+    (generating, rho, rho_measured)
+}
+
 impl Generation<'_> {
     /// The path strategies' second moment for the path of connection `c` (strategy (s, t)
     /// of f), estimated by importance sampling from BDPT's sample (module doc, "BDPT or
@@ -554,12 +695,50 @@ impl Generation<'_> {
         emission
     }
 
-    /// One sample: generated in f, landed/reused/re-traced in every window frame.
+    /// One sample: generated in f, landed/reused/re-traced in every window frame. The
+    /// phases: [`Generation::trace_in_f`] (the subpaths, through the window structure),
+    /// [`Generation::validity`] (which frames reproduce which segments),
+    /// [`Generation::serve_own_frame`] (the ordinary BDPT sample in f, and the
+    /// view-independent part at x1), then per other window frame the light part
+    /// ([`Generation::light_part_in`]) and the camera part
+    /// ([`Generation::camera_part_in`]).
     pub(super) fn sample(&self, px: u32, py: u32, index: u32, sc: &mut Scratch, out: &mut TileOut) {
+        let traced = self.trace_in_f(px, py, index, sc, out);
+        let valid = self.validity(sc);
+        let own = self.serve_own_frame(&traced, sc, out);
+        // Landing visibility of x1 from f's eye, answered once for the whole window (the
+        // same ray in every frame where x1 and the eye do not move).
+        let mut land_occ: Option<FrameMask> = None;
+        for j in (0..self.scenes.len()).filter(|&j| j != self.jf) {
+            let mut inv = 0u64;
+            let light_kept = self.light_part_in(j, &traced, &valid, sc, out, &mut inv);
+            self.camera_part_in(
+                j,
+                &traced,
+                &valid,
+                &own,
+                light_kept,
+                sc,
+                out,
+                &mut land_occ,
+                inv,
+            );
+        }
+        self.flush(out);
+    }
+
+    /// Phase 1 of [`Generation::sample`]: the camera and light subpaths in f, each ray's
+    /// validity in the window frames recorded with its hit (into `sc`).
+    fn trace_in_f(
+        &self,
+        px: u32,
+        py: u32,
+        index: u32,
+        sc: &mut Scratch,
+        out: &mut TileOut,
+    ) -> Traced {
         let (seed, f, jf) = (self.bdpt.common.seed, self.f, self.jf);
-        let n = self.scenes.len();
         let scene_f = &self.scenes[jf];
-        let all = self.mfa.all_frames();
         // One sequence per pixel for the frames of a block (module doc, "Sample streams"):
         // the samples the frames of a window land in a pixel are stratified together.
         let (block, idx) = stream_index(f, self.interleave, self.bdpt.common.spp, index);
@@ -616,9 +795,21 @@ impl Generation<'_> {
             );
         }
         st.samples += 1;
-        let (cam, light) = (&sc.cam, &sc.light);
+        Traced {
+            raster,
+            cs0,
+            ls0,
+            ns,
+            cost0,
+            cam_cost,
+        }
+    }
 
-        // Validity of the sampled segments in the other frames.
+    /// Phase 2 of [`Generation::sample`]: the frames in which the sampled segments are
+    /// reproduced (module doc, "Valid prefixes"); fills `sc.light_prefix`.
+    fn validity(&self, sc: &mut Scratch) -> Validity {
+        let (n, jf) = (self.scenes.len(), self.jf);
+        let all = self.mfa.all_frames();
         let and = |m: &[FrameMask]| m.iter().fold(all, |a, b| a & b);
         // The light subpath's vertices depend on the lights and on the materials of the
         // surfaces it meets.
@@ -630,12 +821,12 @@ impl Generation<'_> {
             .light_masks
             .iter()
             .enumerate()
-            .take(light.len().saturating_sub(1))
+            .take(sc.light.len().saturating_sub(1))
         {
             let prev = sc.light_prefix[i];
             sc.light_prefix.push(prev & m);
         }
-        let x1 = cam.get(1).filter(|v| v.kind == VertexKind::Surface);
+        let x1 = first_surface(&sc.cam);
         // Camera segments after x1 reproduced (the camera subpath is the same walk in g).
         let cam_segments = if x1.is_some() {
             and(sc.cam_masks.get(1..).unwrap_or(&[])) & self.materials_same
@@ -651,17 +842,31 @@ impl Generation<'_> {
         } else {
             1 << jf
         };
+        Validity {
+            light_valid,
+            cam_segments,
+            cam_valid,
+            x1_bary: x1.and_then(|v| barycentrics(&self.scenes[jf], v)),
+        }
+    }
 
-        // View-independent part at x1 (t ≥ 2), shadow rays answered for the whole window.
-        let mut pilot = (Rgb::ZERO, cam_cost, 0.0);
+    /// Phase 3 of [`Generation::sample`]: the view-independent part at x1 (t ≥ 2, shadow
+    /// rays answered for the whole window) and the ordinary BDPT sample in f, landed with
+    /// its light-tracing splats (recorded in `sc.splats` for the other frames).
+    fn serve_own_frame(&self, traced: &Traced, sc: &mut Scratch, out: &mut TileOut) -> Own {
+        let jf = self.jf;
+        let n = self.scenes.len();
+        let scene_f = &self.scenes[jf];
+        let (cam, light) = (&sc.cam, &sc.light);
+        let mut pilot = (Rgb::ZERO, traced.cam_cost, 0.0);
         let mut reach = (0.0, 0.0, [0.0; 3]);
         let emission = self.split_at_x1(
             light,
             cam,
             &sc.cam_rays,
-            &ns,
+            &traced.ns,
             &mut sc.entries,
-            st,
+            &mut out.stats[jf],
             &mut pilot,
             &mut reach,
         );
@@ -671,7 +876,6 @@ impl Generation<'_> {
             *a += b;
         }
 
-        // Own frame: the ordinary BDPT sample.
         let mut own = emission.map_or(Rgb::ZERO, |(l, _)| l);
         for e in &sc.entries {
             if e.vis >> jf & 1 == 1 {
@@ -679,6 +883,7 @@ impl Generation<'_> {
             }
         }
         let (path_value, path_cost, path_moment) = pilot;
+        let raster = traced.raster;
         if self.pilot {
             out.pilot_cost[1] += path_cost;
             if own.is_finite() && path_value.is_finite() {
@@ -699,9 +904,9 @@ impl Generation<'_> {
         out.counts.landed[jf] += 1;
         sc.splats.clear();
         let record = (n > 1).then_some(&mut sc.splats);
-        self.light_trace(jf, light, cam, &ns, 2, out, &mut inv, record);
+        self.light_trace(jf, light, cam, &traced.ns, 2, out, &mut inv, record);
         out.counts.invalid[jf] += inv;
-        let own_cost = query_cost(&out.stats[jf]) - cost0;
+        let own_cost = query_cost(&out.stats[jf]) - traced.cost0;
         if self.pilot {
             out.pilot_cost[0] += own_cost;
             out.pilot_n += 1;
@@ -709,219 +914,289 @@ impl Generation<'_> {
             out.other_cost += own_cost;
             out.other_n += 1;
         }
+        Own {
+            value: own,
+            emission,
+        }
+    }
 
-        // Other frames of the window.
+    /// Phase 4a of [`Generation::sample`], window frame `j`: the light subpath reused, or
+    /// regenerated from the same light stream (into `sc.light_g`) with its reproduced
+    /// prefix answered from f's hits, and its light-tracing splats. Returns how many
+    /// light vertices g reproduces (module doc, "Valid prefixes").
+    fn light_part_in(
+        &self,
+        j: usize,
+        traced: &Traced,
+        valid: &Validity,
+        sc: &mut Scratch,
+        out: &mut TileOut,
+        inv: &mut u64,
+    ) -> usize {
+        let scene_g = &self.scenes[j];
+        let frame_g = self.frames[j];
+        let (cam, light) = (&sc.cam, &sc.light);
+        let light_ok = valid.light_valid >> j & 1 == 1;
+        let light_kept = sc
+            .light_prefix
+            .iter()
+            .take_while(|&&m| m >> j & 1 == 1)
+            .count();
+        if !light_ok && self.bdpt.path_strategies {
+            sc.light_g.clear();
+        } else if !light_ok {
+            // Regenerated from the same stream: the rays of the reproduced prefix are
+            // f's rays with f's hits in g, answered without a traversal.
+            let mut l2 = traced.ls0.clone();
+            // Ray i leaves vertex i and makes vertex i + 1: the first light_kept − 1
+            // rays made reproduced vertices.
+            let mut prefix = ReproducedPrefix::new(&sc.light_hits, light_kept.saturating_sub(1));
+            generate_light_subpath_with(
+                scene_g,
+                self.bdpt,
+                &mut l2,
+                &mut sc.light_g,
+                &mut out.stats[j],
+                &mut |r| prefix.trace(scene_g, r),
+            );
+            out.stats[j].rays -= prefix.answered();
+        }
+        let same_camera = self.same_camera >> j & 1 == 1;
+        if same_camera {
+            // Same camera: the splats of the reproduced light vertices are f's, where
+            // unoccluded in g; the others are made from g's light subpath.
+            for &(s, pixel, value, vis) in &sc.splats {
+                if s <= light_kept && vis >> j & 1 == 1 {
+                    out.splats.push(Contribution {
+                        frame: frame_g,
+                        pixel,
+                        value,
+                        weight: 0.0,
+                        splat: true,
+                    });
+                }
+            }
+            if !light_ok {
+                self.light_trace(
+                    j,
+                    &sc.light_g,
+                    cam,
+                    &traced.ns,
+                    light_kept + 1,
+                    out,
+                    inv,
+                    None,
+                );
+            }
+        } else {
+            let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
+            self.light_trace(j, light_g, cam, &traced.ns, 2, out, inv, None);
+        }
+        light_kept
+    }
+
+    /// Phase 4b of [`Generation::sample`], window frame `j`: where the sample lands in g
+    /// ([`Generation::landing`]) and how it serves g there: f's value (an escaped ray),
+    /// the view-independent part reused (all strategies, or those s ≤ 1 with g's light
+    /// subpath for the rest), or the camera subpath re-traced in g (from f's reproduced
+    /// prefix when there is one).
+    #[allow(clippy::too_many_arguments)]
+    fn camera_part_in(
+        &self,
+        j: usize,
+        traced: &Traced,
+        valid: &Validity,
+        own: &Own,
+        light_kept: usize,
+        sc: &mut Scratch,
+        out: &mut TileOut,
+        land_occ: &mut Option<FrameMask>,
+        mut inv: u64,
+    ) {
+        let scene_g = &self.scenes[j];
+        let (cam, light) = (&sc.cam, &sc.light);
+        let x1 = first_surface(cam);
         let walk = Walk {
             x1,
-            x1_bary: x1.and_then(|v| barycentrics(scene_f, v)),
+            x1_bary: valid.x1_bary,
             escape: sc.cam_rays.first().copied(),
-            cam_valid,
-            cam_segments,
+            cam_valid: valid.cam_valid,
+            cam_segments: valid.cam_segments,
         };
-        // Landing visibility of x1 from f's eye, answered once for the whole window (the
-        // same ray in every frame where x1 and the eye do not move).
-        let mut land_occ: Option<FrameMask> = None;
-        for j in (0..n).filter(|&j| j != jf) {
-            let scene_g = &self.scenes[j];
-            let frame_g = self.frames[j];
-            let mut inv = 0u64;
-            // Light part: reused or re-generated from the same light stream.
-            let light_ok = light_valid >> j & 1 == 1;
-            // Light vertices reproduced in g (module doc, "Valid prefixes").
-            let light_kept = sc
-                .light_prefix
-                .iter()
-                .take_while(|&&m| m >> j & 1 == 1)
-                .count();
-            if !light_ok && self.bdpt.path_strategies {
-                sc.light_g.clear();
-            } else if !light_ok {
-                // Regenerated from the same stream: the rays of the reproduced prefix are
-                // f's rays with f's hits in g, answered without a traversal.
-                let mut l2 = ls0.clone();
-                // Ray i leaves vertex i and makes vertex i + 1: the first light_kept − 1
-                // rays made reproduced vertices.
-                let mut prefix =
-                    ReproducedPrefix::new(&sc.light_hits, light_kept.saturating_sub(1));
-                generate_light_subpath_with(
-                    scene_g,
-                    self.bdpt,
-                    &mut l2,
-                    &mut sc.light_g,
+        let landing = self.landing(j, &walk, land_occ, &mut out.stats);
+        let esc_dir = sc.cam_rays.first().map(|r| r.d);
+        let light_ok = valid.light_valid >> j & 1 == 1;
+        let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
+        let mut around = [None, None];
+        if matches!(
+            landing,
+            Landing::Reuse(_) | Landing::Partial(_) | Landing::RetracePrefix(_)
+        ) && x1
+            .and_then(|v| v.surface.as_ref())
+            .is_some_and(|sv| self.from_f[j].instance_deformed(sv.si.instance as usize))
+        {
+            out.counts.on_deformed[j] += 1;
+        }
+        let raster = traced.raster;
+        let (raster_g, value, same_point) = match landing {
+            Landing::Missed => {
+                out.counts.invalid[j] += inv;
+                return;
+            }
+            Landing::ReuseEscaped(r) => {
+                out.counts.reused[j] += 1;
+                around = self.trajectory(j, self.jf, None, esc_dir);
+                (r, own.value, true)
+            }
+            Landing::Reuse(r) | Landing::Partial(r) => {
+                let partial = matches!(landing, Landing::Partial(_));
+                around = self.trajectory(j, self.jf, x1, esc_dir);
+                let v = x1.expect("reuse needs x1 on a surface");
+                let regenerated = partial.then_some(Regenerated {
+                    light: &sc.light_g,
+                    cam,
+                    cam_rays: &sc.cam_rays,
+                    kept: light_kept,
+                });
+                let l = self.reused_value(
+                    j,
+                    v,
+                    own.emission,
+                    &sc.entries,
+                    regenerated,
+                    &traced.ns,
                     &mut out.stats[j],
-                    &mut |r| prefix.trace(scene_g, r),
                 );
-                out.stats[j].rays -= prefix.answered();
+                if partial {
+                    out.counts.partial[j] += 1;
+                }
+                out.counts.reused[j] += 1;
+                (r, l, true)
             }
-            let same_camera = self.same_camera >> j & 1 == 1;
-            if same_camera {
-                // Same camera: the splats of the reproduced light vertices are f's, where
-                // unoccluded in g; the others are made from g's light subpath.
-                for &(s, pixel, value, vis) in &sc.splats {
-                    if s <= light_kept && vis >> j & 1 == 1 {
-                        out.splats.push(Contribution {
-                            frame: frame_g,
-                            pixel,
-                            value,
-                            weight: 0.0,
-                            splat: true,
-                        });
-                    }
+            Landing::RetracePrefix(r) => {
+                out.counts.retraced[j] += 1;
+                let before = queries(&out.stats[j]);
+                // Camera vertices 0..=kept are f's in g (the rays that made them give
+                // f's hits, same materials): re-traced from f's raster position, those
+                // rays answered with f's hits, the strategies on reproduced vertices
+                // only taken from f (module doc, "Reuse in frame g", step 3).
+                let kept = if self.materials_same >> j & 1 == 1 {
+                    sc.cam_masks
+                        .iter()
+                        .take_while(|&&m| m >> j & 1 == 1)
+                        .count()
+                } else {
+                    0
+                };
+                if kept >= 1 {
+                    out.counts.prefix[j] += 1;
                 }
-                if !light_ok {
-                    self.light_trace(
-                        j,
-                        &sc.light_g,
-                        cam,
-                        &ns,
-                        light_kept + 1,
-                        out,
-                        &mut inv,
-                        None,
-                    );
-                }
-            } else {
-                let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
-                self.light_trace(j, light_g, cam, &ns, 2, out, &mut inv, None);
-            }
-
-            // Camera part: where does the sample land in g, and how does it serve g?
-            let landing = self.landing(j, &walk, &mut land_occ, &mut out.stats);
-            let esc_dir = sc.cam_rays.first().map(|r| r.d);
-            let light_g: &[Vertex] = if light_ok { light } else { &sc.light_g };
-            let mut around = [None, None];
-            if matches!(
-                landing,
-                Landing::Reuse(_) | Landing::Partial(_) | Landing::RetracePrefix(_)
-            ) && x1
-                .and_then(|v| v.surface.as_ref())
-                .is_some_and(|sv| self.from_f[j].instance_deformed(sv.si.instance as usize))
-            {
-                out.counts.on_deformed[j] += 1;
-            }
-            let (raster_g, value, same_point) = match landing {
-                Landing::Missed => {
-                    out.counts.invalid[j] += inv;
-                    continue;
-                }
-                Landing::ReuseEscaped(r) => {
-                    out.counts.reused[j] += 1;
-                    around = self.trajectory(j, jf, None, esc_dir);
-                    (r, own, true)
-                }
-                Landing::Reuse(r) | Landing::Partial(r) => {
-                    let partial = matches!(landing, Landing::Partial(_));
-                    around = self.trajectory(j, jf, x1, esc_dir);
-                    let v = x1.expect("reuse needs x1 on a surface");
-                    let regenerated = partial.then_some(Regenerated {
-                        light: &sc.light_g,
-                        cam,
-                        cam_rays: &sc.cam_rays,
-                        kept: light_kept,
-                    });
-                    let l = self.reused_value(
-                        j,
-                        v,
-                        emission,
-                        &sc.entries,
-                        regenerated,
-                        &ns,
-                        &mut out.stats[j],
-                    );
-                    if partial {
-                        out.counts.partial[j] += 1;
-                    }
-                    out.counts.reused[j] += 1;
-                    (r, l, true)
-                }
-                Landing::RetracePrefix(r) => {
-                    out.counts.retraced[j] += 1;
-                    let before = queries(&out.stats[j]);
-                    // Camera vertices 0..=kept are f's in g (the rays that made them give
-                    // f's hits, same materials): re-traced from f's raster position, those
-                    // rays answered with f's hits, the strategies on reproduced vertices
-                    // only taken from f (module doc, "Reuse in frame g", step 3).
-                    let kept = if self.materials_same >> j & 1 == 1 {
-                        sc.cam_masks
-                            .iter()
-                            .take_while(|&&m| m >> j & 1 == 1)
-                            .count()
-                    } else {
-                        0
-                    };
-                    if kept >= 1 {
-                        out.counts.prefix[j] += 1;
-                    }
-                    let cam_g: &[Vertex] = if kept == sc.cam_masks.len() {
-                        cam
-                    } else {
-                        let mut c2 = cs0.clone();
-                        let mut prefix = ReproducedPrefix::new(&sc.cam_hits, kept);
-                        generate_camera_subpath_with(
-                            scene_g,
-                            self.bdpt,
-                            raster,
-                            &mut c2,
-                            &mut sc.cam_g,
-                            &mut out.stats[j],
-                            &mut |ray| prefix.trace(scene_g, ray),
-                        );
-                        out.stats[j].rays -= prefix.answered();
-                        if self.shutter > 0.0 {
-                            let d = scene_g.camera.generate_ray(raster).d;
-                            around = self.trajectory(j, j, sc.cam_g.get(1), Some(d));
-                        }
-                        &sc.cam_g
-                    };
-                    let reproduced = Reproduced {
-                        camera: kept,
-                        light: light_kept,
-                        entries: &sc.entries,
-                        emission,
-                    };
-                    let l = self.prefix_strategies(
-                        j,
-                        light_g,
-                        cam_g,
-                        &ns,
-                        &reproduced,
-                        &mut out.stats[j],
-                    );
-                    out.counts.retrace_queries[j] += queries(&out.stats[j]) - before;
-                    (r, l, false)
-                }
-                Landing::Retrace(r) => {
-                    let before = queries(&out.stats[j]);
-                    let mut c2 = cs0.clone();
-                    generate_camera_subpath(
+                let cam_g: &[Vertex] = if kept == sc.cam_masks.len() {
+                    cam
+                } else {
+                    let mut c2 = traced.cs0.clone();
+                    let mut prefix = ReproducedPrefix::new(&sc.cam_hits, kept);
+                    generate_camera_subpath_with(
                         scene_g,
                         self.bdpt,
-                        r,
+                        raster,
                         &mut c2,
                         &mut sc.cam_g,
                         &mut out.stats[j],
+                        &mut |ray| prefix.trace(scene_g, ray),
                     );
-                    out.counts.retraced[j] += 1;
+                    out.stats[j].rays -= prefix.answered();
                     if self.shutter > 0.0 {
-                        let d = scene_g.camera.generate_ray(r).d;
+                        let d = scene_g.camera.generate_ray(raster).d;
                         around = self.trajectory(j, j, sc.cam_g.get(1), Some(d));
                     }
-                    let l = self.camera_strategies(j, light_g, &sc.cam_g, &ns, &mut out.stats[j]);
-                    out.counts.retrace_queries[j] += queries(&out.stats[j]) - before;
-                    (r, l, false)
-                }
-            };
-            out.counts.landed[j] += 1;
-            if value.is_finite() {
-                Self::land(out, j, raster_g, value, around, same_point);
-            } else {
-                inv += 1;
-                Self::land(out, j, raster_g, Rgb::ZERO, around, same_point);
+                    &sc.cam_g
+                };
+                let reproduced = Reproduced {
+                    camera: kept,
+                    light: light_kept,
+                    entries: &sc.entries,
+                    emission: own.emission,
+                };
+                let l = self.prefix_strategies(
+                    j,
+                    light_g,
+                    cam_g,
+                    &traced.ns,
+                    &reproduced,
+                    &mut out.stats[j],
+                );
+                out.counts.retrace_queries[j] += queries(&out.stats[j]) - before;
+                (r, l, false)
             }
-            out.counts.invalid[j] += inv;
+            Landing::Retrace(r) => {
+                let before = queries(&out.stats[j]);
+                let mut c2 = traced.cs0.clone();
+                generate_camera_subpath(
+                    scene_g,
+                    self.bdpt,
+                    r,
+                    &mut c2,
+                    &mut sc.cam_g,
+                    &mut out.stats[j],
+                );
+                out.counts.retraced[j] += 1;
+                if self.shutter > 0.0 {
+                    let d = scene_g.camera.generate_ray(r).d;
+                    around = self.trajectory(j, j, sc.cam_g.get(1), Some(d));
+                }
+                let l =
+                    self.camera_strategies(j, light_g, &sc.cam_g, &traced.ns, &mut out.stats[j]);
+                out.counts.retrace_queries[j] += queries(&out.stats[j]) - before;
+                (r, l, false)
+            }
+        };
+        out.counts.landed[j] += 1;
+        if value.is_finite() {
+            Self::land(out, j, raster_g, value, around, same_point);
+        } else {
+            inv += 1;
+            Self::land(out, j, raster_g, Rgb::ZERO, around, same_point);
         }
-        self.flush(out);
+        out.counts.invalid[j] += inv;
     }
+}
+
+/// What [`Generation::trace_in_f`] leaves for the later phases of a sample.
+struct Traced {
+    /// The sample's raster position in f.
+    raster: Vec2,
+    /// The camera and light samplers at the start of their subpaths (to regenerate them
+    /// in another frame from the same numbers).
+    cs0: PixelSampler,
+    ls0: PixelSampler,
+    /// The connection stream.
+    ns: PixelSampler,
+    /// Query cost in f before the sample, and that of its camera subpath.
+    cost0: f64,
+    cam_cost: f64,
+}
+
+/// The frames reproducing a sample's segments ([`Generation::validity`]).
+struct Validity {
+    /// Frames reproducing the whole light subpath, with f's lights and materials.
+    light_valid: FrameMask,
+    /// As [`Walk::cam_segments`] and [`Walk::cam_valid`].
+    cam_segments: FrameMask,
+    cam_valid: FrameMask,
+    /// x1's barycentrics on its triangle in f.
+    x1_bary: Option<(f32, f32)>,
+}
+
+/// The sample's value in f and its emission part ([`Generation::serve_own_frame`]).
+struct Own {
+    value: Rgb,
+    emission: Option<(Rgb, f32)>,
+}
+
+/// The first eye vertex when it is on a surface.
+fn first_surface(cam: &[Vertex]) -> Option<&Vertex> {
+    cam.get(1).filter(|v| v.kind == VertexKind::Surface)
 }
 
 impl Stbpt {
@@ -994,38 +1269,13 @@ impl Stbpt {
             .expect("f is in its window");
         let accels: Vec<_> = scenes.iter().map(|s| &s.accel).collect();
         let mfa = MultiFrameAccel::new(frames[0], &accels);
-        // What differs between f and each window frame (and, for motion blur, between
-        // neighbouring frames): every decision of the samples about the scene is read
-        // from these.
-        let from_f: Vec<FrameDelta> = scenes
-            .iter()
-            .map(|s| FrameDelta::between(&scenes[jf], s))
-            .collect();
-        let steps: Vec<FrameDelta> = if self.settings.shutter > 0.0 {
-            scenes
-                .windows(2)
-                .map(|w| FrameDelta::between(&w[0], &w[1]))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let mut lights_same: FrameMask = 0;
-        let mut materials_same: FrameMask = 0;
-        let mut same_camera: FrameMask = 0;
-        for (j, d) in from_f.iter().enumerate() {
-            // Light subpaths and light samples depend on the lights and, through lights
-            // at infinity, on the scene's bounding sphere; a change of the bounds counts
-            // in any case (conservative where no light is at infinity).
-            if !(d.lights_changed() || d.bounds_changed()) {
-                lights_same |= 1 << j;
-            }
-            if !d.materials_changed() {
-                materials_same |= 1 << j;
-            }
-            if !d.camera_changed() {
-                same_camera |= 1 << j;
-            }
-        }
+        let WindowChanges {
+            from_f,
+            steps,
+            lights_same,
+            materials_same,
+            same_camera,
+        } = WindowChanges::new(&scenes, jf, self.settings.shutter > 0.0);
         self.open_films(scenes[jf].camera.width, scenes[jf].camera.height);
         // Under a moving camera the entries reused in a frame with another camera are
         // re-weighted for it (module doc, "MIS weights in another frame"). The path
@@ -1101,21 +1351,12 @@ impl Stbpt {
         let n_tiles = (tiles_x * h.div_ceil(TILE)) as usize;
         let n = frames.len();
         let spp = self.settings.bdpt.common.spp;
-        let mut counts = Counts::new(n);
-        let mut pilot = Pilot::new(w, h);
-        // The pixels generating samples, and of those the ones with all strategies and the
-        // measured ones. Their shares are of all of f's pixels (not of the generating
-        // ones): they normalise per-pixel sums of light subpaths over the whole image.
-        let (mut generating, mut with_all, mut measured) = (0usize, 0usize, 0usize);
-        for (x, y) in (0..h).flat_map(|y| (0..w).map(move |x| (x, y))) {
-            if gen_at(x, y) {
-                generating += 1;
-                with_all += usize::from(all_at(x, y));
-                measured += usize::from(measured_at(x, y));
-            }
-        }
-        let rho = with_all as f64 / (w as f64 * h as f64).max(1.0);
-        let rho_measured = measured as f64 / (w as f64 * h as f64).max(1.0);
+        let mut totals = Totals {
+            counts: Counts::new(n),
+            stats,
+            pilot: Pilot::new(w, h),
+        };
+        let (generating, rho, rho_measured) = pixel_shares(w, h, gen_at, all_at, measured_at);
         for (s, first) in
             (0..spp).flat_map(|s| (0..n_tiles).step_by(TILES_PER_BATCH).map(move |t| (s, t)))
         {
@@ -1123,24 +1364,7 @@ impl Stbpt {
             let results = parallel::map_chunks(batch_tiles, 1, |range| {
                 let t = (first + range.start) as u32;
                 let (x0, y0, tw, th) = tile_rect(t, tiles_x, TILE, w, h);
-                let mut out = TileOut {
-                    batch: Vec::new(),
-                    squares: Vec::new(),
-                    splats: Vec::new(),
-                    blur: Default::default(),
-                    landings: Vec::new(),
-                    stats: vec![Stats::default(); n],
-                    counts: Counts::new(n),
-                    pilot: Vec::new(),
-                    pilot_splats: Vec::new(),
-                    unreachable: 0.0,
-                    reachable: 0.0,
-                    shares: [0.0; 3],
-                    pilot_cost: [0.0; 2],
-                    pilot_n: 0,
-                    other_cost: 0.0,
-                    other_n: 0,
-                };
+                let mut out = TileOut::new(n);
                 let mut sc = Scratch::default();
                 for y in y0..y0 + th {
                     for x in (x0..x0 + tw).filter(|&x| gen_at(x, y)) {
@@ -1166,33 +1390,36 @@ impl Stbpt {
                 for (film, batch) in film_blur.iter_mut().zip(&r.blur) {
                     film.add_batch_where(batch, in_list);
                 }
-                counts.add(&r.counts);
-                for (a, b) in stats.iter_mut().zip(&r.stats) {
-                    *a += *b;
-                }
-                for &(pixel, b, p, m) in &r.pilot {
-                    pilot.add_sample(pixel, b, p, m);
-                }
-                for &(pixel, m) in &r.pilot_splats {
-                    pilot.moment[pixel as usize] += m / rho_measured;
-                }
-                pilot.unreachable += r.unreachable;
-                pilot.reachable += r.reachable;
-                for (a, b) in pilot.shares.iter_mut().zip(r.shares) {
-                    *a += b;
-                }
-                pilot.cost_bdpt += r.pilot_cost[0];
-                pilot.cost_path += r.pilot_cost[1];
-                pilot.samples += r.pilot_n;
-                pilot.other_cost += r.other_cost;
-                pilot.other_samples += r.other_n;
-                // Splats come from a share rho of the samples' light subpaths: scaled to
-                // what every sample's would give.
-                for c in r.splats.iter().filter(|c| c.splat && c.frame == f) {
-                    pilot.splat_sq[c.pixel as usize] += luminance(c.value).powi(2) / rho;
-                }
+                totals.add(r, f, rho, rho_measured);
             }
         }
+        self.record_served(f, k, mode, &frames, in_list, &totals, generating, rho);
+    }
+
+    /// The end of [`Stbpt::generate`]: the counts of every frame of the render list the
+    /// samples served (for its report), and what serving each distance gave
+    /// ([`adapt::assess`], [`strategies::decide`]): on a grid frame, the choices of the
+    /// frames up to the next.
+    #[allow(clippy::too_many_arguments)]
+    fn record_served(
+        &mut self,
+        f: u32,
+        k: u32,
+        mode: Mode,
+        frames: &[u32],
+        in_list: impl Fn(u32) -> bool,
+        totals: &Totals,
+        generating: usize,
+        rho: f64,
+    ) {
+        let Totals {
+            counts,
+            stats,
+            pilot,
+        } = totals;
+        let light_tracing = self.settings.bdpt.light_tracing;
+        let adaptive = self.settings.adaptive;
+        let spp = self.settings.bdpt.common.spp;
         for (j, &g) in frames.iter().enumerate().filter(|&(_, &g)| in_list(g)) {
             let p = self.pending.entry(g).or_default();
             p.stats += stats[j];
@@ -1210,7 +1437,7 @@ impl Stbpt {
             p.served_by_light += rho;
         }
         let generated = (generating as u64 * spp as u64).max(1);
-        let (next, mut strategy) = strategies::decide(&pilot, spp, mode, adaptive);
+        let (next, mut strategy) = strategies::decide(pilot, spp, mode, adaptive);
         self.served.insert(
             f,
             counts.landed.iter().sum::<u64>() as f64 / generated as f64,

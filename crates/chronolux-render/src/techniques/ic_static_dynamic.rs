@@ -359,6 +359,137 @@ struct Segment {
     dynamic_count: usize,
 }
 
+/// A frame's photons ([`IcStaticDynamic`]'s step 2): the static paths a dynamic object
+/// can change re-traced in this frame, the dynamic maps (their new hits and the negated
+/// static ones), the caustic map and the frame's global map.
+struct FramePhotons {
+    /// Photons re-traced (global and caustic), and of the global ones those whose hits
+    /// changed.
+    retraced: usize,
+    dynamic_paths: u64,
+    /// Photons of negative flux in the dynamic map.
+    negative: usize,
+    dyn_map: PhotonMap,
+    /// The dynamic photons that a gather reads.
+    dyn_gathered: PhotonMap,
+    caustic: PhotonMap,
+    /// The frame's global map (`None` when nothing changed: the static map is it).
+    frame_map: Option<PhotonMap>,
+    /// Rays traced: one per vertex, one per escape.
+    photon_rays: u64,
+}
+
+/// The dynamic cache of a frame and the blend weights ([`IcStaticDynamic`]'s step 3).
+struct DynamicPart {
+    cache: IrradianceCache,
+    loose: Option<IrradianceCache>,
+    /// Records the dynamic cache gathered.
+    records: u64,
+    /// Cache points with β > 0.
+    blended_points: usize,
+    rec_beta: Vec<f32>,
+    rec_corr: Vec<Rgb>,
+}
+
+/// The photons of frame `scene` in segment `seg` (see [`FramePhotons`]).
+fn frame_photons(seg: &Segment, scene: &FrameScene, s: &PmIcSettings) -> FramePhotons {
+    let n = s.photons;
+    // Photons that can differ from their static paths, re-traced in this frame.
+    let boxes = dynamic_bounds(scene, &seg.dynamic);
+    let (g_idx, c_idx) = if seg.lights_static {
+        (
+            retrace_set(&seg.global, &seg.global_candidates, &boxes),
+            retrace_set(&seg.caustic, &seg.caustic_candidates, &boxes),
+        )
+    } else {
+        (
+            seg.global_candidates.clone(),
+            seg.caustic_candidates.clone(),
+        )
+    };
+    let g_new = trace_list(scene, &g_idx, s.common.seed, n, Keep::All);
+    let c_new = trace_list(scene, &c_idx, caustic_seed(s.common.seed), n, Keep::Caustic);
+    // Rays traced: one per vertex, one per escape.
+    let photon_rays = g_new
+        .iter()
+        .chain(&c_new)
+        .map(|p| p.points.len().saturating_sub(1) as u64 + u64::from(p.escape != Vec3::ZERO))
+        .sum::<u64>();
+
+    // Dynamic photons: re-traced ones whose hits differ from the static ones.
+    let mut dyn_photons = Vec::new();
+    let mut dyn_gathered = Vec::new();
+    let mut dynamic_paths = 0u64;
+    for (&i, path) in g_idx.iter().zip(&g_new) {
+        let a = &path.hits[..];
+        let b = seg.global.hits_of(i as usize);
+        if a == b {
+            continue;
+        }
+        dynamic_paths += 1;
+        for t in a {
+            dyn_photons.push(t.photon);
+            if t.gathered {
+                dyn_gathered.push(t.photon);
+            }
+        }
+        for t in b {
+            dyn_photons.push(t.photon.negated());
+            if t.gathered {
+                dyn_gathered.push(t.photon.negated());
+            }
+        }
+    }
+    let dyn_photons = cancel_twins(dyn_photons);
+    let negative = dyn_photons
+        .iter()
+        .filter(|p| p.flux.x < 0.0 || p.flux.y < 0.0 || p.flux.z < 0.0)
+        .count();
+    let dyn_map = PhotonMap::build(dyn_photons);
+    let dyn_gathered = PhotonMap::build(cancel_twins(dyn_gathered));
+    // The caustic map in photon order: static hits, re-traced photons' new hits.
+    let mut caustic = Vec::new();
+    let mut next = 0;
+    for i in 0..n as usize {
+        if next < c_idx.len() && c_idx[next] as usize == i {
+            caustic.extend(c_new[next].hits.iter().map(|t| t.photon));
+            next += 1;
+        } else {
+            caustic.extend(seg.caustic.hits_of(i).iter().map(|t| t.photon));
+        }
+    }
+    let caustic = PhotonMap::build(caustic);
+    // The frame's global map, as `pm-ic` builds it: every photon's hits in `F` in
+    // photon order (static hits for the photons not re-traced). The dynamic cache's
+    // gathers read it (one lookup per gather ray instead of one in each of the
+    // static and the dynamic map).
+    let frame_map = if dyn_map.is_empty() {
+        None
+    } else {
+        let mut all = Vec::with_capacity(seg.global.hits.len());
+        let mut next = 0;
+        for i in 0..n as usize {
+            if next < g_idx.len() && g_idx[next] as usize == i {
+                all.extend(g_new[next].hits.iter().map(|t| t.photon));
+                next += 1;
+            } else {
+                all.extend(seg.global.hits_of(i).iter().map(|t| t.photon));
+            }
+        }
+        Some(PhotonMap::build(all))
+    };
+    FramePhotons {
+        retraced: g_idx.len() + c_idx.len(),
+        dynamic_paths,
+        negative,
+        dyn_map,
+        dyn_gathered,
+        caustic,
+        frame_map,
+        photon_rays,
+    }
+}
+
 /// The per-frame state of `ic-static-dynamic` (see the module doc).
 struct FrameState {
     scene: Arc<FrameScene>,
@@ -459,9 +590,68 @@ impl IcStaticDynamic {
     }
 
     /// Makes (or keeps) the segment of `frame` and computes the frame's photons, caches
-    /// and blend weights.
+    /// and blend weights: [`IcStaticDynamic::ensure_segment`], [`frame_photons`],
+    /// [`IcStaticDynamic::extend_static_cache`], [`IcStaticDynamic::blend_and_dynamic_cache`].
     fn prepare(&mut self, source: &mut FrameSource, frame: u32) -> FrameState {
         let t0 = std::time::Instant::now();
+        let new_segment = self.ensure_segment(source, frame);
+        let t_segment = t0.elapsed().as_secs_f64();
+        let scene_arc = source.frame(frame);
+        let scene = &*scene_arc;
+        let s = self.settings.pmic.clone();
+        let seg = self.segment.as_ref().expect("segment made");
+        let ph = frame_photons(seg, scene, &s);
+        let t_photons = t0.elapsed().as_secs_f64() - t_segment;
+
+        // Cache points of this frame; the static cache where it lacks records.
+        let key = hash_words(&[s.common.seed, 0, 0x6963]);
+        let probe_src = NoIndirect;
+        let probe_view = EyeView::new(&s, scene, &ph.caustic, &probe_src);
+        let points = probe_points(&probe_view, scene, key);
+        let static_added = self.extend_static_cache(&s, &points);
+        let dynamic = self.blend_and_dynamic_cache(&s, scene, &points, &ph);
+        let t_cache = t0.elapsed().as_secs_f64() - t_segment - t_photons;
+
+        let seg = self.segment.as_ref().expect("segment made");
+        let mut r = serde_json::Map::new();
+        r.insert("photons".into(), s.photons.into());
+        r.insert("new_segment".into(), new_segment.into());
+        r.insert("dynamic_instances".into(), seg.dynamic_count.into());
+        r.insert("lights_static".into(), seg.lights_static.into());
+        r.insert(
+            "candidate_photons".into(),
+            (seg.global_candidates.len() + seg.caustic_candidates.len()).into(),
+        );
+        r.insert("retraced_photons".into(), ph.retraced.into());
+        r.insert("dynamic_photon_paths".into(), ph.dynamic_paths.into());
+        r.insert("dynamic_map_photons".into(), ph.dyn_map.len().into());
+        r.insert("negative_photons".into(), ph.negative.into());
+        r.insert("static_records".into(), seg.cache.len().into());
+        r.insert("static_records_added".into(), static_added.into());
+        r.insert("dynamic_records".into(), dynamic.records.into());
+        r.insert(
+            "blended_point_fraction".into(),
+            (dynamic.blended_points as f64 / points.len().max(1) as f64).into(),
+        );
+        r.insert("seconds_segment".into(), t_segment.into());
+        r.insert("seconds_photons".into(), t_photons.into());
+        r.insert("seconds_cache".into(), t_cache.into());
+        FrameState {
+            scene: scene_arc,
+            dyn_map: ph.dyn_map,
+            frame_map: ph.frame_map,
+            caustic: ph.caustic,
+            dyn_cache: dynamic.cache,
+            dyn_loose: dynamic.loose,
+            rec_beta: dynamic.rec_beta,
+            rec_corr: dynamic.rec_corr,
+            report: r,
+            photon_rays: ph.photon_rays,
+        }
+    }
+
+    /// Makes the segment of `frame` unless the current one is it; true when made.
+    fn ensure_segment(&mut self, source: &mut FrameSource, frame: u32) -> bool {
         let idx = source
             .frames()
             .iter()
@@ -470,128 +660,35 @@ impl IcStaticDynamic {
         let len = self.segment_len(source);
         let first = idx / len * len;
         let end = (first + len).min(source.frames().len().max(first + 1));
-        let mut new_segment = false;
         if self
             .segment
             .as_ref()
             .is_none_or(|g| g.first != first || g.end != end)
         {
             self.segment = Some(self.make_segment(source, first, end));
-            new_segment = true;
+            return true;
         }
-        let t_segment = t0.elapsed().as_secs_f64();
-        let scene_arc = source.frame(frame);
-        let scene = &*scene_arc;
-        let s = self.settings.pmic.clone();
-        let seg = self.segment.as_ref().expect("segment made");
-        let n = s.photons;
+        false
+    }
 
-        // Photons that can differ from their static paths, re-traced in this frame.
-        let boxes = dynamic_bounds(scene, &seg.dynamic);
-        let (g_idx, c_idx) = if seg.lights_static {
-            (
-                retrace_set(&seg.global, &seg.global_candidates, &boxes),
-                retrace_set(&seg.caustic, &seg.caustic_candidates, &boxes),
-            )
-        } else {
-            (
-                seg.global_candidates.clone(),
-                seg.caustic_candidates.clone(),
-            )
-        };
-        let g_new = trace_list(scene, &g_idx, s.common.seed, n, Keep::All);
-        let c_new = trace_list(scene, &c_idx, caustic_seed(s.common.seed), n, Keep::Caustic);
-        // Rays traced: one per vertex, one per escape.
-        let photon_rays = g_new
-            .iter()
-            .chain(&c_new)
-            .map(|p| p.points.len().saturating_sub(1) as u64 + u64::from(p.escape != Vec3::ZERO))
-            .sum::<u64>();
-
-        // Dynamic photons: re-traced ones whose hits differ from the static ones.
-        let mut dyn_photons = Vec::new();
-        let mut dyn_gathered = Vec::new();
-        let mut dynamic_paths = 0u64;
-        for (&i, path) in g_idx.iter().zip(&g_new) {
-            let a = &path.hits[..];
-            let b = seg.global.hits_of(i as usize);
-            if a == b {
-                continue;
-            }
-            dynamic_paths += 1;
-            for t in a {
-                dyn_photons.push(t.photon);
-                if t.gathered {
-                    dyn_gathered.push(t.photon);
-                }
-            }
-            for t in b {
-                dyn_photons.push(t.photon.negated());
-                if t.gathered {
-                    dyn_gathered.push(t.photon.negated());
-                }
-            }
-        }
-        let dyn_photons = cancel_twins(dyn_photons);
-        let negative = dyn_photons
-            .iter()
-            .filter(|p| p.flux.x < 0.0 || p.flux.y < 0.0 || p.flux.z < 0.0)
-            .count();
-        let dyn_map = PhotonMap::build(dyn_photons);
-        let dyn_gathered = PhotonMap::build(cancel_twins(dyn_gathered));
-        // The caustic map in photon order: static hits, re-traced photons' new hits.
-        let mut caustic = Vec::new();
-        let mut next = 0;
-        for i in 0..n as usize {
-            if next < c_idx.len() && c_idx[next] as usize == i {
-                caustic.extend(c_new[next].hits.iter().map(|t| t.photon));
-                next += 1;
-            } else {
-                caustic.extend(seg.caustic.hits_of(i).iter().map(|t| t.photon));
-            }
-        }
-        let caustic = PhotonMap::build(caustic);
-        // The frame's global map, as `pm-ic` builds it: every photon's hits in `F` in
-        // photon order (static hits for the photons not re-traced). The dynamic cache's
-        // gathers read it (one lookup per gather ray instead of one in each of the
-        // static and the dynamic map).
-        let frame_map = if dyn_map.is_empty() {
-            None
-        } else {
-            let mut all = Vec::with_capacity(seg.global.hits.len());
-            let mut next = 0;
-            for i in 0..n as usize {
-                if next < g_idx.len() && g_idx[next] as usize == i {
-                    all.extend(g_new[next].hits.iter().map(|t| t.photon));
-                    next += 1;
-                } else {
-                    all.extend(seg.global.hits_of(i).iter().map(|t| t.photon));
-                }
-            }
-            Some(PhotonMap::build(all))
-        };
-        let t_photons = t0.elapsed().as_secs_f64() - t_segment;
-
-        // Cache points of this frame; the static cache where it lacks records.
-        let key = hash_words(&[s.common.seed, 0, 0x6963]);
-        let probe_src = NoIndirect;
-        let probe_view = EyeView::new(&s, scene, &caustic, &probe_src);
-        let points = probe_points(&probe_view, scene, key);
-        let all_dynamic = !seg.lights_static;
+    /// Adds to the segment's static cache the records this frame's cache points on static
+    /// objects lack (gathered in the static scene from the static map); returns how many.
+    fn extend_static_cache(&mut self, s: &PmIcSettings, points: &[(u64, CacheQuery)]) -> usize {
         let seg = self.segment.as_mut().expect("segment made");
+        let all_dynamic = !seg.lights_static;
         let static_before = seg.cache.len();
         {
             let (static_scene, static_map) = (&seg.scene, &seg.map);
             let dynamic = &seg.dynamic;
             extend_cache(
                 &mut seg.cache,
-                &points,
+                points,
                 &s.cache,
                 |i| {
                     let q = &points[i].1;
                     !(all_dynamic || dynamic.get(q.instance as usize).copied().unwrap_or(true))
                 },
-                |q, k| gather_at(static_scene, &s, &[static_map], q.p, q.n, k),
+                |q, k| gather_at(static_scene, s, &[static_map], q.p, q.n, k),
             );
         }
         if let Some(loose) = &mut seg.loose {
@@ -599,8 +696,21 @@ impl IcStaticDynamic {
                 loose.insert(*rec);
             }
         }
+        seg.cache.len() - static_before
+    }
+
+    /// β and the correction at every static record (once), β at the cache points (1 on
+    /// dynamic objects, else interpolated from the records), and the dynamic cache where
+    /// β > 0, gathered in this frame.
+    fn blend_and_dynamic_cache(
+        &self,
+        s: &PmIcSettings,
+        scene: &FrameScene,
+        points: &[(u64, CacheQuery)],
+        ph: &FramePhotons,
+    ) -> DynamicPart {
         let seg = self.segment.as_ref().expect("segment made");
-        let static_added = seg.cache.len() - static_before;
+        let all_dynamic = !seg.lights_static;
         let on_dynamic = |q: &CacheQuery| {
             all_dynamic
                 || seg
@@ -612,9 +722,9 @@ impl IcStaticDynamic {
 
         // β and the correction at every static record, once.
         let blend = Blend {
-            settings: &s,
+            settings: s,
             static_map: &seg.map,
-            dynamic_map: &dyn_map,
+            dynamic_map: &ph.dyn_map,
             low: self.settings.influence_low,
             high: self.settings.influence_high,
             sigmas: self.settings.influence_sigmas,
@@ -626,10 +736,10 @@ impl IcStaticDynamic {
                 recs[r]
                     .iter()
                     .map(|rec| {
-                        let corr = if dyn_gathered.is_empty() {
+                        let corr = if ph.dyn_gathered.is_empty() {
                             Rgb::ZERO
                         } else {
-                            dyn_gathered.irradiance(rec.p, rec.n, &s.global, r_g)
+                            ph.dyn_gathered.irradiance(rec.p, rec.n, &s.global, r_g)
                         };
                         (blend.beta(scene, rec.p, rec.n), corr)
                     })
@@ -657,12 +767,12 @@ impl IcStaticDynamic {
         let static_map = &seg.map;
         let dyn_records = extend_cache(
             &mut dyn_cache,
-            &points,
+            points,
             &s.cache,
             |i| point_beta[i] > 0.0,
             |q, k| {
-                let m = frame_map.as_ref().unwrap_or(static_map);
-                gather_at(scene, &s, &[m], q.p, q.n, k)
+                let m = ph.frame_map.as_ref().unwrap_or(static_map);
+                gather_at(scene, s, &[m], q.p, q.n, k)
             },
         );
         let dyn_loose = seg.loose.as_ref().map(|l| {
@@ -673,48 +783,15 @@ impl IcStaticDynamic {
             c
         });
         let blended_points = point_beta.iter().filter(|b| **b > 0.0).count();
-        let t_cache = t0.elapsed().as_secs_f64() - t_segment - t_photons;
-
-        let mut r = serde_json::Map::new();
-        r.insert("photons".into(), s.photons.into());
-        r.insert("new_segment".into(), new_segment.into());
-        r.insert("dynamic_instances".into(), seg.dynamic_count.into());
-        r.insert("lights_static".into(), seg.lights_static.into());
-        r.insert(
-            "candidate_photons".into(),
-            (seg.global_candidates.len() + seg.caustic_candidates.len()).into(),
-        );
-        r.insert(
-            "retraced_photons".into(),
-            (g_idx.len() + c_idx.len()).into(),
-        );
-        r.insert("dynamic_photon_paths".into(), dynamic_paths.into());
-        r.insert("dynamic_map_photons".into(), dyn_map.len().into());
-        r.insert("negative_photons".into(), negative.into());
-        r.insert("static_records".into(), seg.cache.len().into());
-        r.insert("static_records_added".into(), static_added.into());
-        r.insert("dynamic_records".into(), dyn_records.into());
-        r.insert(
-            "blended_point_fraction".into(),
-            (blended_points as f64 / points.len().max(1) as f64).into(),
-        );
-        r.insert("seconds_segment".into(), t_segment.into());
-        r.insert("seconds_photons".into(), t_photons.into());
-        r.insert("seconds_cache".into(), t_cache.into());
-        FrameState {
-            scene: scene_arc,
-            dyn_map,
-            frame_map,
-            caustic,
-            dyn_cache,
-            dyn_loose,
+        DynamicPart {
+            cache: dyn_cache,
+            loose: dyn_loose,
+            records: dyn_records,
+            blended_points,
             rec_beta,
             rec_corr,
-            report: r,
-            photon_rays,
         }
     }
-
     fn source<'a>(&'a self, st: &'a FrameState) -> StaticDynamicSource<'a> {
         let seg = self.segment.as_ref().expect("segment made");
         StaticDynamicSource {

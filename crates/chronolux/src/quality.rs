@@ -347,6 +347,61 @@ fn meets(level: &Level, target: f64, criterion: &str) -> bool {
 }
 
 pub fn run(args: QualityArgs) -> Result<()> {
+    let denoise = check(&args)?;
+    let frames = parse_frames(&args.frames)?;
+    let measured = match &args.measure {
+        Some(m) => parse_measure(m)?,
+        None => frames.clone(),
+    };
+    if let Some(f) = measured.iter().find(|f| !frames.contains(f)) {
+        bail!("--measure names frame {f}, which --frames does not render");
+    }
+    let method_sets = parse_sets(&args.set)?;
+    let baseline_sets = parse_sets(&args.baseline_set)?;
+    let (refs, w, h) = load_references(&args, &measured)?;
+    let mut targets = args.target_flip.clone();
+    targets.sort_by(|a, b| b.partial_cmp(a).unwrap());
+    let input = scene_input::load(&args.scene)?;
+    let mut methods = vec![args.method.clone()];
+    methods.extend(args.baseline.clone());
+    let sets_of = |k: usize| if k == 0 { &method_sets } else { &baseline_sets };
+    for (k, m) in methods.iter().enumerate() {
+        warn_if_depth_ignored(&args, m, sets_of(k))?;
+    }
+    let bench = Bench {
+        args: &args,
+        desc: Arc::new(input.desc),
+        animation: input.animation,
+        camera: input.camera,
+        size: (w, h),
+        frames: &frames,
+        measured: &measured,
+        refs: &refs,
+        denoise,
+        hdr: flip::HdrSettings::default(),
+        targets: &targets,
+    };
+    let mut results = Vec::new();
+    for (mk, m) in methods.iter().enumerate() {
+        results.push(bench.climb(m, sets_of(mk))?);
+    }
+    let result = summarize(&args, denoise, &frames, &measured, &targets, results);
+    let md = markdown(&result);
+    if let Some(p) = &args.report {
+        chronolux_io::output::write_atomic(p, |w| std::io::Write::write_all(w, md.as_bytes()))
+            .with_context(|| format!("writing report {}", p.display()))?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string(&result)?);
+    } else {
+        print!("{md}");
+    }
+    Ok(())
+}
+
+/// The arguments checked (and the thread pool sized); the denoiser's quality when every
+/// frame is denoised.
+fn check(args: &QualityArgs) -> Result<Option<crate::denoise::DenoiseQuality>> {
     if args.start_effort == 0 || args.max_effort < args.start_effort {
         bail!("--start-effort must be ≥ 1 and ≤ --max-effort");
     }
@@ -358,24 +413,22 @@ pub fn run(args: QualityArgs) -> Result<()> {
     {
         bail!("--denoise: {why}");
     }
-    // The denoiser's quality when every frame is denoised.
     let denoise = args
         .denoise
         .then(|| args.denoise_quality.unwrap_or_default());
     crate::render::set_threads(args.threads)?;
     crate::render::check_fps_and_depth(args.fps, args.max_depth)?;
-    let frames = parse_frames(&args.frames)?;
-    let measured = match &args.measure {
-        Some(m) => parse_measure(m)?,
-        None => frames.clone(),
-    };
-    if let Some(f) = measured.iter().find(|f| !frames.contains(f)) {
-        bail!("--measure names frame {f}, which --frames does not render");
-    }
-    let method_sets = parse_sets(&args.set)?;
-    let baseline_sets = parse_sets(&args.baseline_set)?;
+    Ok(denoise)
+}
+
+/// The reference frames of the measured frames, and the size rendered (`--resolution`,
+/// else the references'), which every reference must have.
+fn load_references(
+    args: &QualityArgs,
+    measured: &[u32],
+) -> Result<(Vec<chronolux_io::image::Image>, u32, u32)> {
     let mut refs = Vec::new();
-    for &f in &measured {
+    for &f in measured {
         let p = args
             .reference
             .join(format!("{}.exr", chronolux_io::output::frame_stem(f)));
@@ -393,126 +446,55 @@ pub fn run(args: QualityArgs) -> Result<()> {
             "references are not all {w}x{h} (the size rendered); pass --resolution to match them"
         );
     }
-    let mut targets = args.target_flip.clone();
-    targets.sort_by(|a, b| b.partial_cmp(a).unwrap());
-    let input = scene_input::load(&args.scene)?;
-    let desc = Arc::new(input.desc);
-    let mut methods = vec![args.method.clone()];
-    methods.extend(args.baseline.clone());
-    let sets_of = |k: usize| if k == 0 { &method_sets } else { &baseline_sets };
-    for (k, m) in methods.iter().enumerate() {
-        let (_, _, ignored) = config_for(m, 1, args.max_depth, args.seed, args.window, sets_of(k))?;
-        // Said, not dropped silently: its error then includes the light of longer paths
-        // than a depth-limited reference has.
-        if let Some(d) = args.max_depth
-            && ignored.contains(&"--max-depth")
-        {
-            log::warn!(
-                "--max-depth {d} does not apply to --method {m}, which renders paths of every depth: its error against a reference limited to depth {d} includes the longer paths' light"
-            );
-        }
-    }
-    let hdr = flip::HdrSettings::default();
+    Ok((refs, w, h))
+}
 
-    let mut results = Vec::new();
-    for (mk, m) in methods.iter().enumerate() {
+/// Says (not drops silently) that `--max-depth` does not apply to method `m`: its error
+/// then includes the light of longer paths than a depth-limited reference has.
+fn warn_if_depth_ignored(
+    args: &QualityArgs,
+    m: &str,
+    sets: &[(String, serde_json::Value)],
+) -> Result<()> {
+    let (_, _, ignored) = config_for(m, 1, args.max_depth, args.seed, args.window, sets)?;
+    if let Some(d) = args.max_depth
+        && ignored.contains(&"--max-depth")
+    {
+        log::warn!(
+            "--max-depth {d} does not apply to --method {m}, which renders paths of every depth: its error against a reference limited to depth {d} includes the longer paths' light"
+        );
+    }
+    Ok(())
+}
+
+/// What every level of every method is rendered and scored with.
+struct Bench<'a> {
+    args: &'a QualityArgs,
+    desc: Arc<chronolux_core::scene::desc::SceneDesc>,
+    animation: Option<chronolux_core::scene::desc::AnimationId>,
+    camera: chronolux_core::scene::frame::CameraChoice,
+    size: (u32, u32),
+    frames: &'a [u32],
+    measured: &'a [u32],
+    refs: &'a [chronolux_io::image::Image],
+    denoise: Option<crate::denoise::DenoiseQuality>,
+    hdr: flip::HdrSettings,
+    /// The targets, highest (easiest) first.
+    targets: &'a [f64],
+}
+
+impl Bench<'_> {
+    /// Method `m`'s levels: the effort doubled from `--start-effort` until every target is
+    /// reached, `--max-effort`, or a level that gives the images of the one before.
+    fn climb(&self, m: &str, sets: &[(String, serde_json::Value)]) -> Result<MethodResult> {
+        let args = self.args;
+        let targets = self.targets;
         let mut levels: Vec<Level> = Vec::new();
         let mut reached: Vec<Option<Level>> = vec![None; targets.len()];
         let mut effort = args.start_effort;
         let mut no_effect = false;
         loop {
-            let (tech, settings, _) = config_for(
-                m,
-                effort,
-                args.max_depth,
-                args.seed,
-                args.window,
-                sets_of(mk),
-            )?;
-            let mut renderer = tech
-                .build(&settings, &BuildContext::default())
-                .map_err(anyhow::Error::msg)?;
-            // A stateless method's frames do not depend on the frames rendered before them,
-            // so it renders only the measured ones (same images, less CPU on the clock).
-            let rendered = if tech.capabilities().stateless {
-                &measured
-            } else {
-                &frames
-            };
-            let builder =
-                FrameBuilder::new(desc.clone(), input.animation, input.camera.clone(), w, h)?;
-            let mut source = FrameSource::new(builder, args.fps, rendered.clone());
-            let mut sink = ScoredSink {
-                denoise,
-                frames: Vec::new(),
-            };
-            // A denoised run makes the albedo and normal passes the denoiser takes.
-            let options = RunOptions {
-                passes: if args.denoise {
-                    PassSet::parse("denoise").expect("preset")
-                } else {
-                    PassSet::default()
-                },
-                seed: args.seed,
-            };
-            let run = chronolux_render::framework::run::run_with(
-                renderer.as_mut(),
-                &mut source,
-                rendered,
-                &mut [&mut sink],
-                None,
-                options,
-            )
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-            let (wall_s, cpu_s) = (run.wall_s, run.cpu_s);
-            let images: Vec<Vec<chronolux_core::color::Rgb>> = sink
-                .frames
-                .into_iter()
-                .filter(|(f, _)| measured.contains(f))
-                .map(|(_, px)| px)
-                .collect();
-            let flips: Vec<f64> = images
-                .iter()
-                .zip(&refs)
-                .map(|(i, r)| flip::flip_hdr(&r.pixels, i, w as usize, h as usize, &hdr).mean())
-                .collect();
-            let relmse: Vec<f64> = images
-                .iter()
-                .zip(&refs)
-                .map(|(i, r)| metrics::rel_mse(i, &r.pixels))
-                .collect();
-            // Flicker over pairs of measured frames that follow each other in the render.
-            let pairs: Vec<usize> = (1..measured.len())
-                .filter(|&k| {
-                    let p = frames.iter().position(|&f| f == measured[k - 1]);
-                    p.is_some_and(|p| frames.get(p + 1) == Some(&measured[k]))
-                })
-                .collect();
-            let flicker = (!pairs.is_empty()).then(|| {
-                let v: Vec<f64> = pairs
-                    .iter()
-                    .map(|&k| {
-                        metrics::flicker(
-                            &images[k - 1],
-                            &images[k],
-                            &refs[k - 1].pixels,
-                            &refs[k].pixels,
-                        )
-                    })
-                    .collect();
-                v.iter().sum::<f64>() / v.len() as f64
-            });
-            let level = Level {
-                effort,
-                wall_s,
-                cpu_s,
-                frames_rendered: rendered.len(),
-                frames_scored: measured.len(),
-                flip_mean: flips.iter().sum::<f64>() / flips.len() as f64,
-                flip_max: flips.iter().copied().fold(0.0, f64::max),
-                relmse_mean: relmse.iter().sum::<f64>() / relmse.len() as f64,
-                flicker,
-            };
+            let level = self.level(m, effort, sets)?;
             eprintln!(
                 "{m} effort {effort}: {:.2} s wall, {:.2} s CPU ({:.2} s per {} measured of {} rendered frames), FLIP mean {:.4} max {:.4}, flicker {}",
                 level.wall_s,
@@ -558,16 +540,130 @@ pub fn run(args: QualityArgs) -> Result<()> {
             .iter()
             .map(|t| interpolate_cpu(&levels, *t, &args.criterion))
             .collect();
-        results.push(MethodResult {
-            method: m.clone(),
+        Ok(MethodResult {
+            method: m.to_string(),
             levels,
             reached,
             interpolated_time_s,
             interpolated_cpu_s,
             effort_has_no_effect: no_effect,
-        });
+        })
     }
 
+    /// One level: method `m` at `effort`, a complete independent render of the frames
+    /// (only the measured ones for a stateless method), timed and scored.
+    fn level(&self, m: &str, effort: u32, sets: &[(String, serde_json::Value)]) -> Result<Level> {
+        let args = self.args;
+        let (w, h) = self.size;
+        let (tech, settings, _) =
+            config_for(m, effort, args.max_depth, args.seed, args.window, sets)?;
+        let mut renderer = tech
+            .build(&settings, &BuildContext::default())
+            .map_err(anyhow::Error::msg)?;
+        // A stateless method's frames do not depend on the frames rendered before them,
+        // so it renders only the measured ones (same images, less CPU on the clock).
+        let rendered = if tech.capabilities().stateless {
+            self.measured
+        } else {
+            self.frames
+        };
+        let builder =
+            FrameBuilder::new(self.desc.clone(), self.animation, self.camera.clone(), w, h)?;
+        let mut source = FrameSource::new(builder, args.fps, rendered.to_vec());
+        let mut sink = ScoredSink {
+            denoise: self.denoise,
+            frames: Vec::new(),
+        };
+        // A denoised run makes the albedo and normal passes the denoiser takes.
+        let options = RunOptions {
+            passes: if args.denoise {
+                PassSet::parse("denoise").expect("preset")
+            } else {
+                PassSet::default()
+            },
+            seed: args.seed,
+        };
+        let run = chronolux_render::framework::run::run_with(
+            renderer.as_mut(),
+            &mut source,
+            rendered,
+            &mut [&mut sink],
+            None,
+            options,
+        )
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+        let images: Vec<Vec<chronolux_core::color::Rgb>> = sink
+            .frames
+            .into_iter()
+            .filter(|(f, _)| self.measured.contains(f))
+            .map(|(_, px)| px)
+            .collect();
+        let (flips, relmse, flicker) = self.score(&images);
+        Ok(Level {
+            effort,
+            wall_s: run.wall_s,
+            cpu_s: run.cpu_s,
+            frames_rendered: rendered.len(),
+            frames_scored: self.measured.len(),
+            flip_mean: flips.iter().sum::<f64>() / flips.len() as f64,
+            flip_max: flips.iter().copied().fold(0.0, f64::max),
+            relmse_mean: relmse.iter().sum::<f64>() / relmse.len() as f64,
+            flicker,
+        })
+    }
+
+    /// Per measured frame its HDR-FLIP and relMSE against the reference, and the mean
+    /// flicker over pairs of measured frames that follow each other in the render.
+    fn score(
+        &self,
+        images: &[Vec<chronolux_core::color::Rgb>],
+    ) -> (Vec<f64>, Vec<f64>, Option<f64>) {
+        let (w, h) = self.size;
+        let (refs, frames, measured) = (self.refs, self.frames, self.measured);
+        let flips: Vec<f64> = images
+            .iter()
+            .zip(refs)
+            .map(|(i, r)| flip::flip_hdr(&r.pixels, i, w as usize, h as usize, &self.hdr).mean())
+            .collect();
+        let relmse: Vec<f64> = images
+            .iter()
+            .zip(refs)
+            .map(|(i, r)| metrics::rel_mse(i, &r.pixels))
+            .collect();
+        let pairs: Vec<usize> = (1..measured.len())
+            .filter(|&k| {
+                let p = frames.iter().position(|&f| f == measured[k - 1]);
+                p.is_some_and(|p| frames.get(p + 1) == Some(&measured[k]))
+            })
+            .collect();
+        let flicker = (!pairs.is_empty()).then(|| {
+            let v: Vec<f64> = pairs
+                .iter()
+                .map(|&k| {
+                    metrics::flicker(
+                        &images[k - 1],
+                        &images[k],
+                        &refs[k - 1].pixels,
+                        &refs[k].pixels,
+                    )
+                })
+                .collect();
+            v.iter().sum::<f64>() / v.len() as f64
+        });
+        (flips, relmse, flicker)
+    }
+}
+
+/// The result: every method's levels, and the flat fields of the first target as given on
+/// the command line (times to it, speed-ups, flicker there).
+fn summarize(
+    args: &QualityArgs,
+    denoise: Option<crate::denoise::DenoiseQuality>,
+    frames: &[u32],
+    measured: &[u32],
+    targets: &[f64],
+    results: Vec<MethodResult>,
+) -> QualityResult {
     // The flat fields speak of the first target as given on the command line.
     let first = args.target_flip[0];
     let k0 = targets.iter().position(|t| *t == first).unwrap();
@@ -581,14 +677,14 @@ pub fn run(args: QualityArgs) -> Result<()> {
     let baseline_time_interp_s = results.get(1).and_then(|r| interp(r, k0));
     let method_time_s = time(&results[0], k0);
     let baseline_time_s = results.get(1).and_then(|r| time(r, k0));
-    let result = QualityResult {
+    QualityResult {
         method: args.method.clone(),
         baseline: args.baseline.clone(),
         criterion: args.criterion.clone(),
         denoise: args.denoise,
         denoise_quality: denoise,
-        frames: frames.clone(),
-        measured: measured.clone(),
+        frames: frames.to_vec(),
+        measured: measured.to_vec(),
         target_flip: first,
         method_time_s,
         baseline_time_s,
@@ -611,20 +707,9 @@ pub fn run(args: QualityArgs) -> Result<()> {
         window: args.window,
         method_flicker: flick(&results[0], k0),
         baseline_flicker: results.get(1).and_then(|r| flick(r, k0)),
-        targets: targets.clone(),
+        targets: targets.to_vec(),
         results,
-    };
-    let md = markdown(&result);
-    if let Some(p) = &args.report {
-        chronolux_io::output::write_atomic(p, |w| std::io::Write::write_all(w, md.as_bytes()))
-            .with_context(|| format!("writing report {}", p.display()))?;
     }
-    if args.json {
-        println!("{}", serde_json::to_string(&result)?);
-    } else {
-        print!("{md}");
-    }
-    Ok(())
 }
 
 fn opt(v: Option<f64>, digits: usize) -> String {

@@ -36,7 +36,10 @@
 //!
 //! Besides *what* changed, a delta says *where*: [`FrameDelta::regions`], the world
 //! bounds of every changed instance in each frame of the delta (from its vertices,
-//! slightly padded: [`FrameScene::instance_world_bounds`]). The techniques that keep
+//! slightly padded: [`FrameScene::instance_world_bounds`]); for an instance that only
+//! deformed (a skinned or morphed mesh that did not move), the bounds of the triangles
+//! that are not the same surface in both frames ([`FrameDelta::triangle_changed`]): a
+//! banner whose lower half swings changed in the lower half only. The techniques that keep
 //! work outside a change (dept's pooling validity, spt's path scan) read these instead of
 //! each computing a region its own way.
 
@@ -66,7 +69,7 @@ pub struct FrameDelta {
     regions: Vec<Region>,
 }
 
-/// One changed instance in one frame of a delta: its world bounds there.
+/// One changed instance in one frame of a delta: where it changed there.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Region {
     /// The instance id.
@@ -75,7 +78,9 @@ pub struct Region {
     /// frame's index in the segment for [`FrameDelta::over`].
     pub frame: u32,
     /// Its world bounds in that frame (from its vertices, padded as
-    /// [`FrameScene::instance_world_bounds`] pads).
+    /// [`FrameScene::instance_world_bounds`] pads); for an instance that only deformed,
+    /// those of its changed triangles (an instance none of whose triangles changed has no
+    /// region).
     pub bounds: Bounds3,
 }
 
@@ -148,6 +153,22 @@ impl FrameDelta {
         let changed = |i: usize| moved[i] || deformed[i];
         let mut regions = regions_in(a, 0, &changed);
         regions.extend(regions_in(b, 1, &changed));
+        // An instance that only deformed changed where its changed triangles are.
+        regions.retain_mut(|r| {
+            let i = r.instance as usize;
+            if moved[i] || !deformed[i] {
+                return true;
+            }
+            let (this, other) = if r.frame == 0 { (a, b) } else { (b, a) };
+            match changed_triangle_bounds(this, other, r.instance) {
+                Some(Some(bounds)) => {
+                    r.bounds = bounds;
+                    true
+                }
+                Some(None) => false,
+                None => true,
+            }
+        });
         FrameDelta {
             moved,
             deformed,
@@ -187,7 +208,7 @@ impl FrameDelta {
     /// `!instance_changed(i)`. One frame or none: nothing changed. Its regions are those of
     /// each consecutive pair, numbered as the segment's frames (an instance that changes
     /// in two pairs has its middle frame's bounds twice; one that changes in none, none):
-    /// together they cover everywhere a changed instance was in the segment.
+    /// together they cover everywhere a changed surface was in the segment.
     pub fn over(frames: &[&FrameScene]) -> FrameDelta {
         let mut d = FrameDelta::default();
         for (k, w) in frames.windows(2).enumerate() {
@@ -365,6 +386,54 @@ pub fn dynamic_instances(frames: &[&FrameScene]) -> Vec<bool> {
 }
 
 /// The [`Region`]s of `scene` (frame `frame` of a delta) of the instances `changed` picks.
+/// The bounds in `this` of the triangles of instance `inst` that are not the same surface
+/// in `this` and `other` (as [`FrameDelta::triangle_changed`] decides, for an instance
+/// that did not move), padded as [`FrameScene::instance_world_bounds`] pads the whole
+/// instance: `Some(None)` when no triangle changed (only unused vertex data did), `None`
+/// when the two frames' geometries of the instance cannot be compared triangle by
+/// triangle (other geometries, indices, materials or placement: all of it changed).
+fn changed_triangle_bounds(
+    this: &FrameScene,
+    other: &FrameScene,
+    inst: u32,
+) -> Option<Option<Bounds3>> {
+    let xf = this.geometry_transforms();
+    let mut bounds: Option<Bounds3> = None;
+    for (g, x) in this.geometry.iter().enumerate() {
+        if this.geometry_instance[g] != inst {
+            continue;
+        }
+        let y = other.geometry.get(g)?;
+        if other.geometry_instance.get(g) != Some(&inst)
+            || x.material != y.material
+            || x.world_space != y.world_space
+            || x.indices.len() != y.indices.len()
+        {
+            return None;
+        }
+        for (ix, iy) in x.indices.iter().zip(y.indices.iter()) {
+            if ix != iy {
+                return None;
+            }
+            if ix.iter().all(|&v| same_vertex(x, y, v as usize)) {
+                continue;
+            }
+            for &v in ix {
+                let q = xf[g].transform_point3(*x.positions.get(v as usize)?);
+                let b = Bounds3 { min: q, max: q };
+                bounds = Some(bounds.map_or(b, |o| o.union(&b)));
+            }
+        }
+    }
+    Some(bounds.map(|b| {
+        let pad = 1e-4 * (b.max - b.min).length().max(1e-3);
+        Bounds3 {
+            min: b.min - Vec3::splat(pad),
+            max: b.max + Vec3::splat(pad),
+        }
+    }))
+}
+
 fn regions_in(scene: &FrameScene, frame: u32, changed: &dyn Fn(usize) -> bool) -> Vec<Region> {
     let n = scene.accel.instances().len();
     scene

@@ -137,19 +137,57 @@ fn instance_points(scene: &FrameScene, i: usize) -> Vec<Vec3> {
         .collect::<Vec<_>>()
 }
 
+/// World positions (in `scene`, one of the delta's frames `a`, `b`) of the vertices of
+/// instance `i`'s triangles that are not the same surface in `a` and `b`
+/// ([`FrameDelta::triangle_changed`], brute force over the triangles): all its vertices
+/// when it moved.
+fn changed_points(
+    d: &FrameDelta,
+    a: &FrameScene,
+    b: &FrameScene,
+    scene: &FrameScene,
+    i: usize,
+) -> Vec<Vec3> {
+    if d.instance_moved(i) {
+        return instance_points(scene, i);
+    }
+    let xf = scene.geometry_transforms();
+    let mut out = Vec::new();
+    for (g, gd) in scene.geometry.iter().enumerate() {
+        if scene.geometry_instance[g] as usize != i {
+            continue;
+        }
+        for (t, ix) in gd.indices.iter().enumerate() {
+            let t = TriRef {
+                geometry: g as u32,
+                triangle: t as u32,
+            };
+            if d.triangle_changed(a, b, t) {
+                out.extend(
+                    ix.iter()
+                        .map(|&v| xf[g].transform_point3(gd.positions[v as usize])),
+                );
+            }
+        }
+    }
+    out
+}
+
 fn inside(b: &chronolux_core::geometry::Bounds3, p: Vec3) -> bool {
     p.cmpge(b.min).all() && p.cmple(b.max).all()
 }
 
 /// `d = between(a, b)` has one region per changed instance (that carries vertices) in
-/// each frame, containing every vertex it has there (brute force over the vertices),
-/// within a padding of 1e-4 of its diagonal (FrameScene::instance_world_bounds' pad,
-/// at least 1e-7), and none for an unchanged instance.
+/// each frame, bounding exactly (brute force over the vertices) every vertex it has there
+/// when it moved, and when it only deformed every vertex of its changed triangles
+/// ([`changed_points`]; no region when none changed), within a padding of 1e-4 of the
+/// box's diagonal (FrameScene::instance_world_bounds' pad, at least 1e-7); none for an
+/// unchanged instance.
 fn regions_bound_exactly_the_changed_instances(d: &FrameDelta, a: &FrameScene, b: &FrameScene) {
     for (k, scene) in [a, b].into_iter().enumerate() {
         let mut expect = Vec::new();
         for i in 0..scene.accel.instances().len() {
-            let pts = instance_points(scene, i);
+            let pts = changed_points(d, a, b, scene, i);
             if !d.instance_changed(i) || pts.is_empty() {
                 continue;
             }
@@ -331,6 +369,22 @@ fn deformed_meshes_change_only_the_triangles_whose_vertices_move() {
             "banner triangle {t} (row {row})"
         );
     }
+    // Where: the swinging lower half only, not the whole banner.
+    regions_bound_exactly_the_changed_instances(&d, &fr[0], &fr[1]);
+    let i = fr[0].geometry_instance[g as usize] as usize;
+    for (k, scene) in fr.iter().enumerate() {
+        let r = d
+            .regions()
+            .iter()
+            .find(|r| r.instance == i as u32 && r.frame == k as u32)
+            .expect("the banner changed");
+        assert!(
+            instance_points(scene, i)
+                .iter()
+                .any(|&p| !inside(&r.bounds, p)),
+            "frame {k}: the region is smaller than the banner"
+        );
+    }
 }
 
 #[test]
@@ -366,8 +420,9 @@ fn segment_dynamic_set_is_the_union_of_pairwise_changes() {
             assert_eq!(a.world_from_object, b.world_from_object, "{what}");
             assert!(!seg_delta.instance_changed(i));
         }
-        // Where: every vertex a dynamic instance has in any frame of the segment lies in
-        // one of its regions; each region names a frame of the segment.
+        // Where: every vertex of a dynamic instance's triangles that change between a
+        // frame of the segment and the next (or the one before) lies in one of its
+        // regions; each region names a frame of the segment.
         for (f, scene) in fr.iter().enumerate() {
             for (i, _) in seg.iter().enumerate().filter(|(_, c)| **c) {
                 let mine: Vec<_> = seg_delta
@@ -375,7 +430,13 @@ fn segment_dynamic_set_is_the_union_of_pairwise_changes() {
                     .iter()
                     .filter(|r| r.instance == i as u32)
                     .collect();
-                for p in instance_points(scene, i) {
+                let mut pts = Vec::new();
+                for (x, y) in [(f.wrapping_sub(1), f), (f, f + 1)] {
+                    if let (Some(a), Some(b)) = (fr.get(x), fr.get(y)) {
+                        pts.extend(changed_points(&FrameDelta::between(a, b), a, b, scene, i));
+                    }
+                }
+                for p in pts {
                     assert!(
                         mine.iter().any(|r| inside(&r.bounds, p)),
                         "{what}: instance {i}, frame {f}: {p} outside its regions"

@@ -178,7 +178,9 @@ struct Change {
     changed: Vec<bool>,
     /// Lights or materials changed and `recast_on_light_change`: every stratum is stale.
     all_stale: bool,
-    /// World boxes (previous and this frame) of the changed instances, slightly enlarged.
+    /// Where the changed instances are in the previous and this frame: the delta's regions
+    /// (padded bounds of a moved instance's vertices, of a deformed one's changed
+    /// triangles).
     boxes: Vec<Bounds3>,
 }
 
@@ -190,22 +192,10 @@ impl State {
         let changed = delta.dynamic_instances();
         let all_stale =
             recast_on_light_change && (delta.lights_changed() || delta.materials_changed());
-        let eps = scene.scene_radius.max(1e-6) * 1e-4;
-        let mut boxes = Vec::new();
-        for (i, _) in changed.iter().enumerate().filter(|(_, c)| **c) {
-            for sc in [&*self.prev, scene] {
-                let mut b = instance_box(sc, i);
-                if !b.is_empty() {
-                    b.min -= Vec3::splat(eps);
-                    b.max += Vec3::splat(eps);
-                    boxes.push(b);
-                }
-            }
-        }
         Change {
             changed,
             all_stale,
-            boxes,
+            boxes: delta.changed_bounds(),
         }
     }
 
@@ -517,27 +507,6 @@ pub fn select_by_age(weights: &[f64], n: usize, rng: &mut Pcg32) -> Vec<usize> {
     }
     chosen.sort_unstable();
     chosen
-}
-
-/// World box of instance `i` of `scene` (empty if absent).
-fn instance_box(scene: &FrameScene, i: usize) -> Bounds3 {
-    let mut out = Bounds3::EMPTY;
-    let Some(inst) = scene.accel.instances().get(i) else {
-        return out;
-    };
-    let b = inst.blas.bounds;
-    if b.is_empty() {
-        return out;
-    }
-    for k in 0..8 {
-        let c = Vec3::new(
-            if k & 1 == 0 { b.min.x } else { b.max.x },
-            if k & 2 == 0 { b.min.y } else { b.max.y },
-            if k & 4 == 0 { b.min.z } else { b.max.z },
-        );
-        out.grow(inst.world_from_object.transform_point3(c));
-    }
-    out
 }
 
 /// Whether the segment `o + t·d`, `t ∈ [0, t_max]`, meets box `b` (slab test).

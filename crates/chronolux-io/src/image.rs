@@ -1,7 +1,8 @@
 //! Images in and out: linear RGB [`Image`], OpenEXR (linear f32) and 8-bit sRGB PNG.
 //!
 //! - [`write_exr`] / [`read_exr`]: scene-referred linear RGB, channels `R`, `G`, `B` as f32,
-//!   scanline blocks, ZIP (16 lines) compression, which is lossless: a round trip is bit-exact.
+//!   scanline blocks, RLE compression ([`EXR_ENCODING`]), which is lossless: a round trip is
+//!   bit-exact.
 //!   [`read_exr`] also reads f16/f32 RGB(A) files written by other renderers (Mitsuba 3).
 //! - [`tonemap_srgb8`] / [`write_png`]: display-referred 8-bit sRGB, by exposure and a plain
 //!   clamp (no filmic curve, [`View::Standard`]), so a PNG value maps one-to-one to an EXR
@@ -170,10 +171,21 @@ fn check_size(path: &Path, image: &Image) -> Result<(), ImageError> {
     })
 }
 
-/// Writes `image` as a linear RGB f32 OpenEXR file (channels R, G, B; scanline blocks, ZIP16,
+/// How every EXR is written: scanlines, RLE (lossless). ZIP16 made files of noisy f32
+/// renders only 9 % smaller (a 512² frame with its noisy layer: 5.76 MB against 6.30 MB
+/// uncompressed, 6.14 MB RLE) but its deflate was about a tenth of a 512² render's CPU
+/// (perf, BENCHMARKS.md "The quality table"); RLE costs a few per cent of that, and every
+/// OpenEXR reader takes it.
+pub const EXR_ENCODING: exr::prelude::Encoding = exr::prelude::Encoding {
+    compression: exr::prelude::Compression::RLE,
+    blocks: exr::prelude::Blocks::ScanLines,
+    line_order: exr::prelude::LineOrder::Increasing,
+};
+
+/// Writes `image` as a linear RGB f32 OpenEXR file (channels R, G, B; [`EXR_ENCODING`],
 /// lossless), atomically.
 pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), ImageError> {
-    use exr::prelude::{Encoding, SpecificChannels, Vec2, WritableImage};
+    use exr::prelude::{SpecificChannels, Vec2, WritableImage};
     let path = path.as_ref();
     check_size(path, image)?;
     let width = image.width as usize;
@@ -183,7 +195,7 @@ pub fn write_exr(path: impl AsRef<Path>, image: &Image) -> Result<(), ImageError
     });
     let exr_image = exr::prelude::Image::from_encoded_channels(
         (width, image.height as usize),
-        Encoding::SMALL_LOSSLESS,
+        EXR_ENCODING,
         channels,
     );
     write_atomic(path, |w| {
@@ -212,7 +224,7 @@ pub fn write_exr_layers(
     extra: &[(String, Vec<f32>)],
 ) -> Result<(), ImageError> {
     use exr::prelude::{
-        AnyChannel, AnyChannels, Encoding, FlatSamples, Layer, LayerAttributes, WritableImage,
+        AnyChannel, AnyChannels, FlatSamples, Layer, LayerAttributes, WritableImage,
     };
     let path = path.as_ref();
     check_size(path, image)?;
@@ -242,7 +254,7 @@ pub fn write_exr_layers(
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
         LayerAttributes::default(),
-        Encoding::SMALL_LOSSLESS,
+        EXR_ENCODING,
         channels,
     );
     let exr_image = exr::prelude::Image::from_layer(layer);

@@ -144,12 +144,14 @@ pub fn help_list() -> String {
 /// The settings a quality level gives `technique` (its defaults with the level's effort
 /// settings), with the level; `quality`: the `--quality` given (`None`: the default
 /// quality, which leaves the defaults where the technique has no table, or no undenoised
-/// entry when `denoise` is false). An explicit level that is not measured is an error
-/// that says what is.
+/// entry when `denoise` is false); `pixels`: the image's pixel count, which picks the
+/// level's entry measured nearest it ([`QualityLevel::pixels`]; `None`: the shared 256²).
+/// An explicit level that is not measured is an error that says what is.
 pub fn quality_settings(
     technique: &dyn Technique,
     quality: Option<&str>,
     denoise: bool,
+    pixels: Option<u64>,
 ) -> Result<Option<(Value, QualityLevel)>, String> {
     let name = quality.unwrap_or(DEFAULT_QUALITY);
     if !QUALITIES.contains(&name) {
@@ -159,7 +161,8 @@ pub fn quality_settings(
         ));
     }
     let with_table = || names_where_quality().join(", ");
-    let Some(level) = technique.quality().iter().find(|l| l.name == name) else {
+    let pixels = pixels.unwrap_or(u64::from(MEASURED_PIXELS));
+    let Some(level) = QualityLevel::nearest(technique.quality(), name, pixels) else {
         return match quality {
             None => Ok(None),
             Some(_) => Err(format!(
@@ -252,22 +255,29 @@ mod tests {
     fn quality_tables_are_well_formed() {
         for t in TECHNIQUES {
             let q = t.quality();
-            let names: Vec<&str> = q.iter().map(|l| l.name).collect();
             if q.is_empty() {
-                assert!(quality_settings(*t, None, true).unwrap().is_none());
-                assert!(quality_settings(*t, Some("final"), true).is_err());
+                assert!(quality_settings(*t, None, true, None).unwrap().is_none());
+                assert!(quality_settings(*t, Some("final"), true, None).is_err());
                 continue;
             }
-            assert_eq!(names, QUALITIES, "{}", t.name());
-            assert!(
-                q.windows(2).all(|w| w[1].flip < w[0].flip),
-                "{}: FLIP not falling",
-                t.name()
-            );
+            // Every resolution measured has the whole table, each entry once.
+            let mut resolutions: Vec<u32> = q.iter().map(|l| l.pixels).collect();
+            resolutions.dedup();
+            assert!(resolutions.contains(&MEASURED_PIXELS), "{}", t.name());
+            for px in &resolutions {
+                let at: Vec<&QualityLevel> = q.iter().filter(|l| l.pixels == *px).collect();
+                let names: Vec<&str> = at.iter().map(|l| l.name).collect();
+                assert_eq!(names, QUALITIES, "{} at {px} pixels", t.name());
+                assert!(
+                    at.windows(2).all(|w| w[1].flip < w[0].flip),
+                    "{}: FLIP not falling at {px} pixels",
+                    t.name()
+                );
+            }
             for l in q {
                 assert!(["high", "fast"].contains(&l.denoiser), "{}", t.name());
                 for denoise in [true, false] {
-                    match quality_settings(*t, Some(l.name), denoise) {
+                    match quality_settings(*t, Some(l.name), denoise, Some(u64::from(l.pixels))) {
                         Ok(Some((s, got))) => {
                             assert_eq!(got, *l);
                             let pairs = if denoise {
@@ -285,7 +295,36 @@ mod tests {
                 }
             }
         }
-        assert!(quality_settings(TECHNIQUES[0], Some("ultra"), true).is_err());
+        assert!(quality_settings(TECHNIQUES[0], Some("ultra"), true, None).is_err());
+    }
+
+    /// A level measured at several resolutions gives each render the entry nearest its
+    /// pixel count by ratio: 1080p (2.07 M pixels) is nearer 512² (0.26 M) than 256².
+    #[test]
+    fn quality_entry_nearest_the_pixel_count() {
+        const TABLE: &[QualityLevel] = &[
+            QualityLevel::denoised("preview", 0.08, &[("spp", "4")]),
+            QualityLevel::denoised("preview", 0.08, &[("spp", "2")]).at(512, 512),
+        ];
+        let pick = |px: u64| {
+            QualityLevel::nearest(TABLE, "preview", px)
+                .unwrap()
+                .denoised[0]
+                .1
+        };
+        assert_eq!(pick(256 * 256), "4");
+        assert_eq!(pick(128 * 128), "4");
+        assert_eq!(pick(360 * 360), "4"); // 362² is the geometric middle
+        assert_eq!(pick(364 * 364), "2");
+        assert_eq!(pick(1920 * 1080), "2");
+        // The registry's own table: the default route at 1080p takes its 512² entry.
+        let st = find("spacetime-dept").unwrap();
+        let (_, at_1080p) = quality_settings(st, None, true, Some(1920 * 1080))
+            .unwrap()
+            .unwrap();
+        assert_eq!(at_1080p.pixels, 512 * 512);
+        let (_, at_256) = quality_settings(st, None, true, None).unwrap().unwrap();
+        assert_eq!(at_256.pixels, MEASURED_PIXELS);
     }
 
     /// `--set spp=0` and `--set max_depth=0` rendered black images without a word; every

@@ -209,7 +209,7 @@ quality table, else the method's own:\n",
 
 /// The settings `render` starts from for `t` when no flag is given.
 fn default_settings(t: &dyn registry::Technique) -> Option<serde_json::Value> {
-    match registry::quality_settings(t, None, true) {
+    match registry::quality_settings(t, None, true, None) {
         Ok(Some((s, _))) => Some(s),
         Ok(None) => Some(t.defaults()),
         Err(_) => None,

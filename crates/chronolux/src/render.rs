@@ -217,42 +217,6 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
             None => (true, None),
         },
     };
-    // The quality level's effort settings under the config file's and the flags'. A
-    // config file's own level is not asked again: its technique settings carry it.
-    let level = registry::quality_settings(tech, args.quality.as_deref(), denoise)
-        .map_err(anyhow::Error::msg)?;
-    let base = match (&level, base) {
-        (Some((q, _)), Some(b)) => {
-            let mut q = q.clone();
-            registry::merge(&mut q, &b);
-            Some(q)
-        }
-        (Some((q, _)), None) => Some(q.clone()),
-        (None, b) => b,
-    };
-    let denoise_quality = args
-        .denoise_quality
-        .or(prev.denoise_quality)
-        .or(level.as_ref().and_then(|(_, l)| {
-            <crate::denoise::DenoiseQuality as clap::ValueEnum>::from_str(l.denoiser, false).ok()
-        }))
-        .unwrap_or_default();
-    let settings = technique_settings(
-        tech,
-        base.as_ref(),
-        common,
-        &flags,
-        args.photons.as_deref(),
-        &sets,
-    )?;
-    // Built once here so that a bad combination fails before the scene is loaded.
-    let built = tech
-        .build(&settings, &BuildContext { shutter })
-        .map_err(anyhow::Error::msg)?;
-    // Direct/indirect asked of a method that does not separate them: said now.
-    passes
-        .resolve(&method, built.separates_light())
-        .map_err(anyhow::Error::msg)?;
     let requested_frames = match args.frames.as_deref() {
         Some(f) => Some(parse_frames(f)?),
         None => prev.frames.clone(),
@@ -271,6 +235,59 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         camera: args.scene.camera.clone().or(prev.camera.clone()),
         stage: args.scene.stage.clone().or(prev.stage.clone()),
     };
+    // The quality level's effort settings under the config file's and the flags'. A
+    // config file's own level is not asked again: its technique settings carry it. The
+    // level's entry is the one measured nearest the image's pixel count: known now when
+    // the resolution is given (or the demo's 256²), else settled again below once the
+    // scene's camera gives it.
+    let known_pixels = match requested_resolution {
+        Some((w, h)) => Some(u64::from(w) * u64::from(h)),
+        None if scene_args.scene.is_none() => Some(256 * 256),
+        None => None,
+    };
+    let settle = |pixels: Option<u64>| -> Result<Settled> {
+        let level = registry::quality_settings(tech, args.quality.as_deref(), denoise, pixels)
+            .map_err(anyhow::Error::msg)?;
+        let base = match (&level, &base) {
+            (Some((q, _)), Some(b)) => {
+                let mut q = q.clone();
+                registry::merge(&mut q, b);
+                Some(q)
+            }
+            (Some((q, _)), None) => Some(q.clone()),
+            (None, b) => b.clone(),
+        };
+        let denoise_quality = args
+            .denoise_quality
+            .or(prev.denoise_quality)
+            .or(level.as_ref().and_then(|(_, l)| {
+                <crate::denoise::DenoiseQuality as clap::ValueEnum>::from_str(l.denoiser, false)
+                    .ok()
+            }))
+            .unwrap_or_default();
+        let settings = technique_settings(
+            tech,
+            base.as_ref(),
+            common,
+            &flags,
+            args.photons.as_deref(),
+            &sets,
+        )?;
+        Ok(Settled {
+            level: level.map(|(_, l)| l),
+            denoise_quality,
+            settings,
+        })
+    };
+    let mut settled = settle(known_pixels)?;
+    // Built once here so that a bad combination fails before the scene is loaded.
+    let built = tech
+        .build(&settled.settings, &BuildContext { shutter })
+        .map_err(anyhow::Error::msg)?;
+    // Direct/indirect asked of a method that does not separate them: said now.
+    passes
+        .resolve(&method, built.separates_light())
+        .map_err(anyhow::Error::msg)?;
     let input = scene_input::load(&scene_args)?;
     let last = last_frame(&input.desc, input.animation, fps);
     let frames = match requested_frames {
@@ -300,6 +317,14 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         None if scene_args.scene.is_none() => (256, 256),
         None => default_resolution(&input.desc, &input.camera),
     };
+    if known_pixels.is_none() {
+        settled = settle(Some(u64::from(w) * u64::from(h)))?;
+    }
+    let Settled {
+        level,
+        denoise_quality,
+        settings,
+    } = settled;
     let config = RunConfig {
         method: method.clone(),
         technique: settings,
@@ -326,13 +351,20 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         denoise,
         denoise_quality,
         quality: match (&level, &args.quality) {
-            (Some((_, l)), _) => Some(l.name.to_string()),
+            (Some(l), _) => Some(l.name.to_string()),
             (None, None) => prev.quality.clone(),
             (None, Some(_)) => None,
         },
         view,
     };
     Ok((config, input, denoise_skipped))
+}
+
+/// What [`resolve`] takes from the quality level for one pixel count.
+struct Settled {
+    level: Option<registry::QualityLevel>,
+    denoise_quality: crate::denoise::DenoiseQuality,
+    settings: serde_json::Value,
 }
 
 /// Renders `config` (its scene already loaded as `input`) into `exec.output`.

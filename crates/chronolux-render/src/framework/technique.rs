@@ -91,8 +91,8 @@ pub struct BuildContext {
 pub struct QualityLevel {
     /// One of [`QUALITIES`].
     pub name: &'static str,
-    /// The mean HDR-FLIP it reached (cornell-moving, 256², whole animation, 12 scored
-    /// frames against Mitsuba's converged references, denoised).
+    /// The mean HDR-FLIP it reached (cornell-moving at [`Self::pixels`], whole animation,
+    /// 12 scored frames against Mitsuba's converged references of that size, denoised).
     pub flip: f32,
     /// `(key, JSON value)` set on the technique's defaults when denoising (keys as
     /// [`set_key`] finds them: `spp` reaches `bdpt.spp` in stbpt's settings).
@@ -103,6 +103,13 @@ pub struct QualityLevel {
     pub undenoised: Option<&'static [(&'static str, &'static str)]>,
     /// Open Image Denoise's network at this level (`high` or `fast`).
     pub denoiser: &'static str,
+    /// The image's pixel count it was measured at. A table may hold a level more than
+    /// once, measured at different resolutions: the cost of a camera sample grows with
+    /// the pixels while a photon pass does not, and the denoiser does more of the work
+    /// at a higher resolution, so the fastest settings to an error move with it
+    /// (BENCHMARKS.md, "The quality table": spp 4 at 256², spp 2 at 512²). A render
+    /// takes the entry measured nearest its own pixel count (by ratio).
+    pub pixels: u32,
 }
 
 impl QualityLevel {
@@ -118,9 +125,47 @@ impl QualityLevel {
             denoised,
             undenoised: None,
             denoiser: "high",
+            pixels: MEASURED_PIXELS,
         }
     }
+
+    /// The same level with Open Image Denoise's `fast` network (measured so: on 2 AVX2
+    /// cores `high` is a large share of a 512² frame's cost, BENCHMARKS.md).
+    pub const fn fast(self) -> Self {
+        Self {
+            denoiser: "fast",
+            ..self
+        }
+    }
+
+    /// The same level measured at `width × height` instead of the shared 256².
+    pub const fn at(self, width: u32, height: u32) -> Self {
+        Self {
+            pixels: width * height,
+            ..self
+        }
+    }
+
+    /// How far `pixels` is from the resolution this entry was measured at (the log of
+    /// the ratio, 0 when equal).
+    pub fn distance(&self, pixels: u64) -> f64 {
+        (pixels.max(1) as f64 / f64::from(self.pixels.max(1)))
+            .ln()
+            .abs()
+    }
+
+    /// The entry of level `name` in `table` measured nearest `pixels` (the first of equals).
+    pub fn nearest<'a>(table: &'a [Self], name: &str, pixels: u64) -> Option<&'a Self> {
+        table
+            .iter()
+            .filter(|l| l.name == name)
+            .min_by(|a, b| a.distance(pixels).total_cmp(&b.distance(pixels)))
+    }
 }
+
+/// The resolution quality levels are measured at unless they say otherwise (256²: the
+/// peers' references of cornell-moving).
+pub const MEASURED_PIXELS: u32 = 256 * 256;
 
 /// The quality levels, lowest first, as `--quality` names them.
 pub const QUALITIES: [&str; 3] = ["draft", "preview", "final"];

@@ -16,6 +16,13 @@ pub static TECHNIQUE: crate::framework::technique::Preset<PathSettings> =
             crate::framework::technique::QualityLevel::denoised("draft", 0.1131, &[("spp", "2")]),
             crate::framework::technique::QualityLevel::denoised("preview", 0.0778, &[("spp", "8")]),
             crate::framework::technique::QualityLevel::denoised("final", 0.0562, &[("spp", "32")]),
+            // 512²: the denoiser does more of the work (BENCHMARKS.md, 512² sweep).
+            crate::framework::technique::QualityLevel::denoised("draft", 0.0917, &[("spp", "2")])
+                .at(512, 512),
+            crate::framework::technique::QualityLevel::denoised("preview", 0.0753, &[("spp", "4")])
+                .at(512, 512),
+            crate::framework::technique::QualityLevel::denoised("final", 0.0561, &[("spp", "16")])
+                .at(512, 512),
         ],
         defaults: PathSettings::default,
         common: |s| &mut s.common,

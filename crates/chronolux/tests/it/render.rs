@@ -366,7 +366,7 @@ fn render_help_lists_the_techniques_from_the_registry() {
     let (spp, photons, window) = (section("--spp"), section("--photons"), section("--window"));
     for t in TECHNIQUES {
         let c = t.capabilities();
-        let start = registry::quality_settings(*t, None, true)
+        let start = registry::quality_settings(*t, None, true, None)
             .unwrap()
             .map_or_else(|| t.defaults(), |(s, _)| s);
         let n = t.common(&start).unwrap().spp;

@@ -147,11 +147,12 @@ pub struct RenderArgs {
     /// defaults (an explicit --quality is then an error naming the methods with one).
     #[arg(long, value_name = "LEVEL", value_parser = clap::builder::PossibleValuesParser::new(chronolux_render::registry::QUALITIES))]
     pub quality: Option<String>,
-    /// Open Image Denoise's quality: `high` (its default), `balanced` (the
+    /// Open Image Denoise's quality: `high` (OIDN's own default), `balanced` (the
     /// same network as `high` on a CPU) or `fast` (a smaller network: about half the
-    /// filter's CPU time, a higher error at equal samples; it reached equal HDR-FLIP with
-    /// 10 % less CPU on the peers' scene on an AMD EPYC: BENCHMARKS.md, "Issue 17: the
-    /// denoiser's cost").
+    /// filter's CPU time, a higher error at equal samples). Unset, the quality level's
+    /// table entry chooses (`fast` for `spacetime-dept`'s draft and preview, where it
+    /// reached the same HDR-FLIP with less CPU: BENCHMARKS.md, "The quality table"), else
+    /// `high`.
     #[arg(
         long,
         value_enum,

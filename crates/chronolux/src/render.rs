@@ -242,7 +242,9 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
     // scene's camera gives it.
     let known_pixels = match requested_resolution {
         Some((w, h)) => Some(u64::from(w) * u64::from(h)),
-        None if scene_args.scene.is_none() => Some(256 * 256),
+        None if scene_args.scene.is_none() => {
+            Some(u64::from(DEMO_RESOLUTION.0) * u64::from(DEMO_RESOLUTION.1))
+        }
         None => None,
     };
     let settle = |pixels: Option<u64>| -> Result<Settled> {
@@ -313,8 +315,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
     }
     let (w, h) = match requested_resolution {
         Some(r) => r,
-        // The built-in demo is meant to finish in a few minutes on a laptop: 256² by default.
-        None if scene_args.scene.is_none() => (256, 256),
+        None if scene_args.scene.is_none() => DEMO_RESOLUTION,
         None => default_resolution(&input.desc, &input.camera),
     };
     if known_pixels.is_none() {
@@ -359,6 +360,10 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
     };
     Ok((config, input, denoise_skipped))
 }
+
+/// The built-in demo's resolution when none is given: meant to finish in a few minutes on
+/// a laptop.
+const DEMO_RESOLUTION: (u32, u32) = (256, 256);
 
 /// What [`resolve`] takes from the quality level for one pixel count.
 struct Settled {

@@ -107,8 +107,9 @@ pub struct QualityLevel {
     /// once, measured at different resolutions: the cost of a camera sample grows with
     /// the pixels while a photon pass does not, and the denoiser does more of the work
     /// at a higher resolution, so the fastest settings to an error move with it
-    /// (BENCHMARKS.md, "The quality table": spp 4 at 256², spp 2 at 512²). A render
-    /// takes the entry measured nearest its own pixel count (by ratio).
+    /// (BENCHMARKS.md, "The quality table": `spacetime-dept`'s preview takes 128k photons
+    /// at 256², 64k at 512²; `path`'s 8 and 4 spp). A render takes the entry measured
+    /// nearest its own pixel count (by ratio).
     pub pixels: u32,
 }
 

@@ -17,6 +17,9 @@
 //!    turns the download off (an offline or hermetic build); a failed download is a
 //!    build warning, not an error.
 
+#[path = "../../build-support/wheel.rs"]
+mod wheel;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -28,6 +31,7 @@ const CACHE_NAME: &str = "oidn-2.5.1";
 
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=../../build-support/wheel.rs");
     for var in [
         "OIDN_DIR",
         "CHRONOLUX_OIDN_FETCH",
@@ -104,99 +108,19 @@ fn fetch() -> Result<PathBuf, String> {
             target.1, target.0
         ));
     }
-    let cache = cache_dir().ok_or("no cache folder (set CHRONOLUX_OIDN_CACHE)")?;
-    let lib = cache.join(CACHE_NAME).join("lib");
-    if has_lib(&lib) {
-        return Ok(lib);
-    }
-    let out = PathBuf::from(std::env::var("OUT_DIR").map_err(|e| e.to_string())?);
-    let download = out.join("pyoidn-wheel");
-    let _ = std::fs::remove_dir_all(&download);
-    std::fs::create_dir_all(&download).map_err(|e| e.to_string())?;
-    let req = download.join("requirements.txt");
-    std::fs::write(&req, format!("{WHEEL} --hash=sha256:{WHEEL_SHA256}\n"))
-        .map_err(|e| e.to_string())?;
-    let pip = Command::new("python3")
-        .args(["-m", "pip", "download", "--no-deps", "--only-binary=:all:"])
-        .args([
-            "--platform",
-            "manylinux2014_x86_64",
-            "--require-hashes",
-            "-q",
-        ])
-        .arg("-r")
-        .arg(&req)
-        .arg("-d")
-        .arg(&download)
-        .output()
-        .map_err(|e| format!("cannot run python3 -m pip: {e}"))?;
-    if !pip.status.success() {
-        return Err(format!(
-            "python3 -m pip download {WHEEL} failed: {}",
-            String::from_utf8_lossy(&pip.stderr)
-                .lines()
-                .rfind(|l| !l.trim().is_empty())
-                .unwrap_or("no message")
-        ));
-    }
-    // Unpack the CPU device's libraries (not CUDA, HIP, SYCL: 40 MB more for devices
-    // this renderer does not create) into a fresh folder, then move it into place, so
-    // that two builds at once never see half a folder.
-    let staging = cache.join(format!("{CACHE_NAME}.part-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&staging);
-    let script = r#"
-import glob, os, re, sys, zipfile
-wheel = glob.glob(os.path.join(sys.argv[1], "pyoidn-*.whl"))[0]
-dest = os.path.join(sys.argv[2], "lib")
-os.makedirs(dest)
-keep = re.compile(r"pyoidn/oidn/lib/(libOpenImageDenoise(_core|_device_cpu)?|libtbb|libtbbbind[_0-9]*)\.so[.0-9]*$")
-with zipfile.ZipFile(wheel) as z:
-    for m in z.namelist():
-        if keep.match(m):
-            with z.open(m) as src, open(os.path.join(dest, os.path.basename(m)), "wb") as dst:
-                dst.write(src.read())
-"#;
-    let unpack = Command::new("python3")
-        .arg("-c")
-        .arg(script)
-        .arg(&download)
-        .arg(&staging)
-        .output()
-        .map_err(|e| format!("cannot run python3: {e}"))?;
-    let _ = std::fs::remove_dir_all(&download);
-    if !unpack.status.success() {
-        let _ = std::fs::remove_dir_all(&staging);
-        return Err(format!(
-            "unpacking the pyoidn wheel failed: {}",
-            String::from_utf8_lossy(&unpack.stderr).trim()
-        ));
-    }
-    let final_dir = cache.join(CACHE_NAME);
-    if std::fs::rename(&staging, &final_dir).is_err() {
-        // Another build put it there first.
-        let _ = std::fs::remove_dir_all(&staging);
-    }
-    if has_lib(&lib) {
-        Ok(lib)
-    } else {
-        Err(format!(
-            "{} has no {} after unpacking",
-            lib.display(),
-            lib_name()
-        ))
-    }
-}
-
-fn cache_dir() -> Option<PathBuf> {
-    let dir = if let Some(d) = std::env::var_os("CHRONOLUX_OIDN_CACHE") {
-        PathBuf::from(d)
-    } else if let Some(d) = std::env::var_os("XDG_CACHE_HOME") {
-        PathBuf::from(d).join("chronolux")
-    } else {
-        PathBuf::from(std::env::var_os("HOME")?)
-            .join(".cache")
-            .join("chronolux")
-    };
-    std::fs::create_dir_all(&dir).ok()?;
-    Some(dir)
+    let cache = wheel::cache_dir("CHRONOLUX_OIDN_CACHE")
+        .ok_or("no cache folder (set CHRONOLUX_OIDN_CACHE)")?;
+    // The CPU device's libraries only (not CUDA, HIP, SYCL: 40 MB more for devices this
+    // renderer does not create).
+    wheel::fetch(
+        &wheel::Wheel {
+            spec: WHEEL,
+            sha256: WHEEL_SHA256,
+            select: &["--platform", "manylinux2014_x86_64"],
+            cache_name: CACHE_NAME,
+            keep: r"pyoidn/oidn/lib/(libOpenImageDenoise(_core|_device_cpu)?|libtbb|libtbbbind[_0-9]*)\.so[.0-9]*$",
+            lib: lib_name(),
+        },
+        &cache,
+    )
 }

@@ -6,7 +6,11 @@
 //!   uniformly chosen triangle, a uniform point on it, offset along the geometric normal,
 //!   direction uniform over that hemisphere) and *box* (origin uniform in the scene bounds,
 //!   direction uniform on the sphere). PCG32-seeded, so every run traces the same rays;
-//!   `--dump-rays` writes them for other renderers (scripts/peer/mitsuba_rays.py).
+//!   `--dump-rays` writes them for other renderers (scripts/peer/mitsuba_rays.py). Each
+//!   set is traced twice: one call per ray (how the kernels trace today) and in packets of
+//!   16 (`intersect_many` / `occluded_many`: Embree's packet kernels, the way Mitsuba's
+//!   wavefront traces the same rays). The backend (Embree or the own BVH,
+//!   `CHRONOLUX_ACCEL=bvh`) is named in the output.
 //! - `bench build`: BVH build seconds (the frame builder's persistent BLASes, one frame,
 //!   and one flat BLAS over all world-space triangles).
 //! - `bench pt`: path-traced samples per second, excluding scene loading and frame building.
@@ -320,20 +324,35 @@ fn ray_sets(scene: &FrameScene, tris: &[(TriRef, [Vec3; 3])], n: usize) -> [Vec<
     [hemi, boxed]
 }
 
-/// Traces all rays; returns (seconds, hits, Σt over hits).
-fn trace(scene: &FrameScene, rays: &[Ray], shadow: bool) -> (f64, u64, f64) {
+/// Traces all rays; returns (seconds, hits, Σt over hits). `packets`: through
+/// `FrameScene::intersect_many` / `occluded_many` (16-ray packets on Embree), as a
+/// wavefront kernel would issue them, instead of one call per ray.
+fn trace(scene: &FrameScene, rays: &[Ray], shadow: bool, packets: bool) -> (f64, u64, f64) {
     let start = Instant::now();
     let (hits, sum_t) = rays
         .par_chunks(4096)
         .map(|chunk| {
             let mut hits = 0u64;
             let mut sum_t = 0f64;
-            for ray in chunk {
-                if shadow {
-                    hits += scene.occluded(ray) as u64;
-                } else if let Some(h) = scene.intersect(ray) {
+            if packets && shadow {
+                let mut out = vec![false; chunk.len()];
+                scene.occluded_many(chunk, &mut out);
+                hits += out.iter().filter(|&&b| b).count() as u64;
+            } else if packets {
+                let mut out = vec![None; chunk.len()];
+                scene.intersect_many(chunk, &mut out);
+                for h in out.iter().flatten() {
                     hits += 1;
                     sum_t += h.t as f64;
+                }
+            } else {
+                for ray in chunk {
+                    if shadow {
+                        hits += scene.occluded(ray) as u64;
+                    } else if let Some(h) = scene.intersect(ray) {
+                        hits += 1;
+                        sum_t += h.t as f64;
+                    }
                 }
             }
             (hits, sum_t)
@@ -391,12 +410,14 @@ fn rays(a: RaysArgs) -> Result<()> {
         let sets = ray_sets(&scene, &tris, a.rays);
         let names = ["hemi", "box"];
         // Per (set, kind): seconds of each round, hits, Σt.
-        let mut secs = [[vec![], vec![]], [vec![], vec![]]];
-        let mut counts = [[(0u64, 0f64); 2]; 2];
+        // Kinds: closest, shadow, closest in packets, shadow in packets.
+        let mut secs: [[Vec<f64>; 4]; 2] = Default::default();
+        let mut counts = [[(0u64, 0f64); 4]; 2];
         for _ in 0..tg.rounds.max(1) {
             for (s, rays) in sets.iter().enumerate() {
-                for kind in 0..2 {
-                    let (dt, hits, sum_t) = pool.install(|| trace(&scene, rays, kind == 1));
+                for kind in 0..4 {
+                    let (dt, hits, sum_t) =
+                        pool.install(|| trace(&scene, rays, kind % 2 == 1, kind >= 2));
                     secs[s][kind].push(dt);
                     counts[s][kind] = (hits, sum_t);
                 }
@@ -413,12 +434,13 @@ fn rays(a: RaysArgs) -> Result<()> {
                     "seconds": secs[s][kind],
                     "hits": hits,
                     "hit_fraction": hits as f64 / n,
-                    "sum_t": if kind == 0 { json!(sum_t) } else { Value::Null },
+                    "sum_t": if kind.is_multiple_of(2) { json!(sum_t) } else { Value::Null },
                 })
             };
             sets_json.insert(
                 name.to_string(),
-                json!({"rays": sets[s].len(), "closest": rec(0), "shadow": rec(1)}),
+                json!({"rays": sets[s].len(), "closest": rec(0), "shadow": rec(1),
+                       "closest_packets": rec(2), "shadow_packets": rec(3)}),
             );
             if let Some(dir) = &a.dump_rays {
                 std::fs::create_dir_all(dir)
@@ -452,6 +474,7 @@ fn rays(a: RaysArgs) -> Result<()> {
     }
     let doc = json!({
         "bench": "rays",
+        "accel": chronolux_core::accel::embree::backend_name(),
         "threads": tg.threads,
         "rounds": tg.rounds,
         "rays_per_set": a.rays,
@@ -463,8 +486,12 @@ fn rays(a: RaysArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "rays on {} thread(s), {} rays per set, median (best) of {} rounds; {}",
-        tg.threads, a.rays, tg.rounds, doc["machine"]
+        "rays on {} thread(s), {} rays per set, median (best) of {} rounds, {} backend; {}",
+        tg.threads,
+        a.rays,
+        tg.rounds,
+        doc["accel"].as_str().unwrap_or(""),
+        doc["machine"]
     );
     for s in &out {
         let b = &s["build"];
@@ -480,10 +507,10 @@ fn rays(a: RaysArgs) -> Result<()> {
                 .unwrap_or(f64::NAN),
         );
         for name in ["hemi", "box"] {
-            for kind in ["closest", "shadow"] {
+            for kind in ["closest", "shadow", "closest_packets", "shadow_packets"] {
                 let r = &s["sets"][name][kind];
                 println!(
-                    "  {name:>4} {kind:<7} {:7.3} Mrays/s ({:.3})  hits {:.1}%",
+                    "  {name:>4} {kind:<15} {:7.3} Mrays/s ({:.3})  hits {:.1}%",
                     r["mrays_per_s_median"].as_f64().unwrap_or(f64::NAN),
                     r["mrays_per_s_best"].as_f64().unwrap_or(f64::NAN),
                     100.0 * r["hit_fraction"].as_f64().unwrap_or(f64::NAN),

@@ -99,6 +99,11 @@ pub struct PartialRun {
     pub _denoise_library: Option<Value>,
     #[serde(default, rename = "denoise_unavailable")]
     pub _denoise_unavailable: Option<Value>,
+    /// Recorded in run.json: the ray-query backend (`embree` or `bvh`) and why not Embree.
+    #[serde(default, rename = "ray_backend")]
+    pub _ray_backend: Option<Value>,
+    #[serde(default, rename = "ray_backend_note")]
+    pub _ray_backend_note: Option<Value>,
     /// Recorded by `chronolux reference`; not a render setting.
     #[serde(default)]
     pub kind: Option<Value>,

@@ -424,6 +424,13 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
             .map(|p| p.display().to_string())
             .into();
     }
+    // Which kernel answered the ray queries (Embree, or the own BVH and why).
+    settings_json["ray_backend"] = chronolux_core::accel::embree::backend_name().into();
+    if let chronolux_core::accel::embree::Backend::Own(why) =
+        chronolux_core::accel::embree::backend()
+    {
+        settings_json["ray_backend_note"] = why.clone().into();
+    }
     if let Some(why) = &exec.denoise_skipped {
         log::warn!("rendering without denoising: {why}");
         settings_json["denoise_unavailable"] = why.clone().into();

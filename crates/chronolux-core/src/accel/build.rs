@@ -40,6 +40,8 @@ pub enum Builder {
     Ploc,
     /// PLOC's tree was too deep; object-median split instead.
     MedianFallback,
+    /// Embree's own builder (SAH with spatial splits; [`super::embree`]).
+    Embree,
 }
 
 /// Builds a CWBVH over `prims` whose depth is below obvhs' traversal stack.

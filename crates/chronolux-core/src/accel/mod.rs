@@ -1,5 +1,10 @@
 //! Ray-tracing acceleration behind our own interface.
 //!
+//! Two backends behind the same types: Intel Embree 4 where the library loads (the
+//! default build fetches it; [`embree`] says why and how), and our own, described here,
+//! where it does not or where `accept` filters are needed. [`Accel::intersect_many`] /
+//! [`Accel::occluded_many`] trace rays in 16-wide packets on Embree.
+//!
 //! Two levels, on obvhs' compressed 8-wide BVH (CWBVH): a [`Blas`] per group of triangles
 //! in its own space, kept across frames (static geometry is merged into one world-space
 //! BLAS built once; each rigidly animated instance keeps its object-space BLAS and only its
@@ -8,6 +13,9 @@
 //! queries take an `accept` filter so alpha-masked surfaces can be skipped during traversal.
 
 pub mod build;
+// The FFI to Embree (a C library loaded at run time) is the one unsafe module of the crate.
+#[allow(unsafe_code)]
+pub mod embree;
 pub mod multi_frame;
 
 use crate::geometry::{Bounds3, PreparedTriangle, Ray};
@@ -47,9 +55,12 @@ fn representable(p: Vec3) -> bool {
 /// A bottom-level structure over triangles in one space.
 pub struct Blas {
     bvh: Option<CwBvh>,
+    /// The same triangles as an Embree scene (primitive *i* = `refs[i]`) where Embree is
+    /// the backend ([`embree`]); then `bvh` and `tris` are empty.
+    embree: Option<embree::Scene>,
     /// Triangles in BVH leaf order.
     tris: Vec<PreparedTriangle>,
-    /// What each leaf-order triangle is.
+    /// What each leaf-order triangle is (input order under Embree).
     refs: Vec<TriRef>,
     /// Some triangle needs the `accept` filter (alpha-tested material).
     pub needs_filter: bool,
@@ -59,8 +70,18 @@ pub struct Blas {
 }
 
 impl Blas {
-    /// Builds over `(ref, vertices)`; `needs_filter` marks alpha-tested content.
+    /// Builds over `(ref, vertices)`; `needs_filter` marks alpha-tested content. On the
+    /// process's backend ([`embree::backend`]).
     pub fn build(items: &[(TriRef, [Vec3; 3])], needs_filter: bool) -> Blas {
+        Self::build_on(items, needs_filter, true)
+    }
+
+    /// Builds on the own BVH, whatever the process's backend (tests, comparisons).
+    pub fn build_own(items: &[(TriRef, [Vec3; 3])], needs_filter: bool) -> Blas {
+        Self::build_on(items, needs_filter, false)
+    }
+
+    fn build_on(items: &[(TriRef, [Vec3; 3])], needs_filter: bool, embree_ok: bool) -> Blas {
         let kept: Vec<(TriRef, [Vec3; 3])>;
         let items = if items
             .iter()
@@ -82,12 +103,28 @@ impl Blas {
         if items.is_empty() {
             return Blas {
                 bvh: None,
+                embree: None,
                 tris: vec![],
                 refs: vec![],
                 needs_filter,
                 bounds,
                 builder: build::Builder::Ploc,
             };
+        }
+        if embree_ok && !needs_filter {
+            let soup: Vec<[[f32; 3]; 3]> =
+                items.iter().map(|(_, v)| v.map(|p| p.to_array())).collect();
+            if let Some(scene) = embree::Scene::triangles(&soup) {
+                return Blas {
+                    bvh: None,
+                    embree: Some(scene),
+                    tris: vec![],
+                    refs: items.iter().map(|(r, _)| *r).collect(),
+                    needs_filter,
+                    bounds,
+                    builder: build::Builder::Embree,
+                };
+            }
         }
         let otris: Vec<Triangle> = items
             .iter()
@@ -107,6 +144,7 @@ impl Blas {
         }
         Blas {
             bvh: Some(bvh),
+            embree: None,
             tris,
             refs,
             needs_filter,
@@ -116,7 +154,12 @@ impl Blas {
     }
 
     pub fn triangle_count(&self) -> usize {
-        self.tris.len()
+        self.refs.len()
+    }
+
+    /// Whether Embree answers this BLAS's queries.
+    pub fn on_embree(&self) -> bool {
+        self.embree.is_some()
     }
 
     /// Closest hit in this BLAS's space below `tmax`: (t, ref, b1, b2).
@@ -128,6 +171,11 @@ impl Blas {
         tmax: f32,
         accept: &F,
     ) -> Option<(f32, TriRef, f32, f32)> {
+        if let Some(scene) = &self.embree {
+            return scene
+                .intersect(o.to_array(), d.to_array(), tmax)
+                .map(|h| (h.t, self.refs[h.prim as usize], h.u, h.v));
+        }
         let bvh = self.bvh.as_ref()?;
         let mut best = None;
         let mut hit = RayHit::none();
@@ -152,6 +200,9 @@ impl Blas {
         tmax: f32,
         accept: &F,
     ) -> bool {
+        if let Some(scene) = &self.embree {
+            return scene.occluded(o.to_array(), d.to_array(), tmax);
+        }
         let Some(bvh) = self.bvh.as_ref() else {
             return false;
         };
@@ -277,6 +328,9 @@ pub struct Hit {
 pub struct Accel {
     instances: Vec<Instance>,
     tlas: Option<CwBvh>,
+    /// The top level on Embree, where every non-empty instance's BLAS is on Embree and
+    /// there is more than one instance or a transformed one; then `tlas` is unused.
+    embree_tlas: Option<embree::Scene>,
     pub bounds: Bounds3,
 }
 
@@ -298,7 +352,8 @@ impl Accel {
                 }
             })
             .collect();
-        let tlas = if instances.len() > 1 {
+        let embree_tlas = Self::embree_top_level(&instances);
+        let tlas = if instances.len() > 1 && embree_tlas.is_none() {
             let aabbs: Vec<Aabb> = boxes
                 .iter()
                 .map(|b| Aabb {
@@ -313,7 +368,51 @@ impl Accel {
         Accel {
             instances,
             tlas,
+            embree_tlas,
             bounds,
+        }
+    }
+
+    /// Embree's top level over `instances` (ids = indices), if all of them are on Embree
+    /// (empty ones are left out: they keep their index, nobody hits them) and a single
+    /// untransformed instance does not make it needless.
+    fn embree_top_level(instances: &[Instance]) -> Option<embree::Scene> {
+        let placed: Vec<&Instance> = instances
+            .iter()
+            .filter(|i| i.blas.triangle_count() > 0)
+            .collect();
+        if placed.iter().any(|i| !i.blas.on_embree())
+            || (instances.len() == 1 && instances[0].identity)
+        {
+            return None;
+        }
+        let items: Vec<(u32, &embree::Scene, [f32; 12])> = instances
+            .iter()
+            .enumerate()
+            .filter_map(|(k, inst)| {
+                let scene = inst.blas.embree.as_ref()?;
+                let m = inst.world_from_object;
+                let mut x = [0.0f32; 12];
+                x[0..3].copy_from_slice(&m.matrix3.x_axis.to_array());
+                x[3..6].copy_from_slice(&m.matrix3.y_axis.to_array());
+                x[6..9].copy_from_slice(&m.matrix3.z_axis.to_array());
+                x[9..12].copy_from_slice(&m.translation.to_array());
+                Some((k as u32, scene, x))
+            })
+            .collect();
+        embree::Scene::instances(&items)
+    }
+
+    /// The hit of Embree's top level as ours.
+    #[inline]
+    fn embree_hit(&self, h: embree::RawHit) -> Hit {
+        let inst = &self.instances[h.instance as usize];
+        Hit {
+            t: h.t,
+            instance: h.instance,
+            tri: inst.global(inst.blas.refs[h.prim as usize]),
+            b1: h.u,
+            b2: h.v,
         }
     }
 
@@ -324,6 +423,11 @@ impl Accel {
     /// Closest hit with `t < ray.tmax`, skipping triangles `accept` rejects (only consulted
     /// for BLASes that need filtering).
     pub fn intersect<F: Fn(TriRef, f32, f32) -> bool>(&self, ray: &Ray, accept: F) -> Option<Hit> {
+        if let Some(top) = &self.embree_tlas {
+            return top
+                .intersect(ray.o.to_array(), ray.d.to_array(), ray.tmax)
+                .map(|h| self.embree_hit(h));
+        }
         let (o, d): (Vec3A, Vec3A) = (ray.o.into(), ray.d.into());
         let local = |inst: &Instance, tmax: f32| inst.closest_world(o, d, tmax, &accept);
         match &self.tlas {
@@ -361,8 +465,96 @@ impl Accel {
         }
     }
 
+    /// The Embree scene that answers this frame's queries whole, if there is one (then
+    /// `accept` is never consulted: alpha-tested BLASes stay on the own BVH).
+    #[inline]
+    fn embree_whole(&self) -> Option<&embree::Scene> {
+        self.embree_tlas
+            .as_ref()
+            .or_else(|| match &self.instances[..] {
+                [only] if only.identity => only.blas.embree.as_ref(),
+                _ => None,
+            })
+    }
+
+    /// Closest hits of many rays (`out[k]` for `rays[k]`; equal to [`Accel::intersect`] on
+    /// each), in packets of [`embree::PACKET`] where Embree holds the frame: Embree's
+    /// packet kernels trace 16 rays per AVX-512 instruction stream.
+    pub fn intersect_many<F: Fn(TriRef, f32, f32) -> bool>(
+        &self,
+        rays: &[Ray],
+        accept: F,
+        out: &mut [Option<Hit>],
+    ) {
+        let Some(scene) = self.embree_whole() else {
+            for (r, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.intersect(r, &accept);
+            }
+            return;
+        };
+        let top = self.embree_tlas.is_some();
+        let mut raw: [Option<embree::RawHit>; embree::PACKET] = Default::default();
+        for (rs, os) in rays
+            .chunks(embree::PACKET)
+            .zip(out.chunks_mut(embree::PACKET))
+        {
+            let mut packet = [([0.0f32; 3], [0.0f32; 3], 0.0f32); embree::PACKET];
+            for (p, r) in packet.iter_mut().zip(rs) {
+                *p = (r.o.to_array(), r.d.to_array(), r.tmax);
+            }
+            let packet = &packet[..rs.len()];
+            scene.intersect_packet(packet, &mut raw);
+            for (o, h) in os.iter_mut().zip(raw.iter_mut()) {
+                *o = h.take().map(|h| {
+                    if top {
+                        self.embree_hit(h)
+                    } else {
+                        Hit {
+                            t: h.t,
+                            instance: 0,
+                            tri: self.instances[0]
+                                .global(self.instances[0].blas.refs[h.prim as usize]),
+                            b1: h.u,
+                            b2: h.v,
+                        }
+                    }
+                });
+            }
+        }
+    }
+
+    /// Occlusion of many rays (equal to [`Accel::occluded`] on each), in packets where
+    /// Embree holds the frame.
+    pub fn occluded_many<F: Fn(TriRef, f32, f32) -> bool>(
+        &self,
+        rays: &[Ray],
+        accept: F,
+        out: &mut [bool],
+    ) {
+        let Some(scene) = self.embree_whole() else {
+            for (r, o) in rays.iter().zip(out.iter_mut()) {
+                *o = self.occluded(r, &accept);
+            }
+            return;
+        };
+        for (rs, os) in rays
+            .chunks(embree::PACKET)
+            .zip(out.chunks_mut(embree::PACKET))
+        {
+            let mut packet = [([0.0f32; 3], [0.0f32; 3], 0.0f32); embree::PACKET];
+            for (p, r) in packet.iter_mut().zip(rs) {
+                *p = (r.o.to_array(), r.d.to_array(), r.tmax);
+            }
+            let packet = &packet[..rs.len()];
+            scene.occluded_packet(packet, os);
+        }
+    }
+
     /// True if anything `accept`s along the ray with `t < ray.tmax`.
     pub fn occluded<F: Fn(TriRef, f32, f32) -> bool>(&self, ray: &Ray, accept: F) -> bool {
+        if let Some(top) = &self.embree_tlas {
+            return top.occluded(ray.o.to_array(), ray.d.to_array(), ray.tmax);
+        }
         let (o, d): (Vec3A, Vec3A) = (ray.o.into(), ray.d.into());
         let local = |inst: &Instance, tmax: f32| inst.any_world(o, d, tmax, &accept);
         match &self.tlas {
@@ -398,11 +590,57 @@ mod tests {
             .collect()
     }
 
+    /// Embree, where this build found it, answers the queries: under CI it must (the
+    /// default build fetches it; `.ci/run` points the cache into the clone), so the
+    /// brute-force tests below test it and not only the own BVH.
+    #[test]
+    fn embree_is_the_backend_where_the_build_found_it() {
+        let built = option_env!("CHRONOLUX_EMBREE_BUILD_LIB").unwrap_or("");
+        if std::env::var("CHRONOLUX_ACCEL").as_deref() == Ok("bvh") {
+            return;
+        }
+        let backend = embree::backend();
+        let Some(_) = crate::testing::external::require_external(
+            (!built.is_empty()).then_some(()),
+            "Embree 4 (the build did not find or fetch it)",
+            "crates/chronolux-core/build.rs fetches the embreex wheel with python3 -m pip",
+        ) else {
+            return;
+        };
+        assert_eq!(*backend, embree::Backend::Embree, "{built} did not load");
+        let tri = [(
+            TriRef {
+                geometry: 0,
+                triangle: 0,
+            },
+            [Vec3::ZERO, Vec3::X, Vec3::Y],
+        )];
+        assert!(Blas::build(&tri, false).on_embree());
+        // Alpha-tested content stays on the own BVH (the `accept` filter).
+        assert!(!Blas::build(&tri, true).on_embree());
+        assert!(!Blas::build_own(&tri, false).on_embree());
+    }
+
     /// Closest hits through the two-level structure equal brute force over the same
     /// world-space triangles (exactly the same triangle and t up to float rounding of the
-    /// instance transform), before and after the instances move.
+    /// instance transform), before and after the instances move; on the process's backend
+    /// (Embree where it loads) and on the own BVH, and the same through the packet queries
+    /// (`intersect_many`, `occluded_many`) as one ray at a time.
     #[test]
     fn two_level_equals_brute_force_before_and_after_motion() {
+        for own in [false, true] {
+            two_level_case(own);
+        }
+    }
+
+    fn two_level_case(own: bool) {
+        let build = |items: &[(TriRef, [Vec3; 3])]| {
+            if own {
+                Blas::build_own(items, false)
+            } else {
+                Blas::build(items, false)
+            }
+        };
         let mut r = Pcg32::new(3, 4);
         let a = random_soup(&mut r, 500, Vec3::ZERO);
         let b = random_soup(&mut r, 300, Vec3::new(3.0, 0.0, 0.0));
@@ -420,8 +658,8 @@ mod tests {
                 })
                 .collect()
         };
-        let blas_a = Arc::new(Blas::build(&refs(0, &a), false));
-        let blas_b = Arc::new(Blas::build(&refs(0, &b), false));
+        let blas_a = Arc::new(build(&refs(0, &a)));
+        let blas_b = Arc::new(build(&refs(0, &b)));
         for frame in 0..3 {
             let m = Affine3A::from_rotation_translation(
                 glam::Quat::from_rotation_y(0.4 * frame as f32),
@@ -450,6 +688,7 @@ mod tests {
                 });
             }
             let mut mismatches = 0;
+            let mut rays = Vec::new();
             for _ in 0..2000 {
                 let o =
                     Vec3::new(r.next_f32(), r.next_f32(), r.next_f32()) * 14.0 - Vec3::splat(2.0);
@@ -458,6 +697,7 @@ mod tests {
                     r.next_f32(),
                 ));
                 let ray = Ray::new(o, d);
+                rays.push(ray);
                 let got = accel.intersect(&ray, |_, _, _| true);
                 let want = brute_force_closest(&world, &ray);
                 match (got, want) {
@@ -477,6 +717,28 @@ mod tests {
                 mismatches <= 2,
                 "{mismatches} different triangles at equal t"
             );
+            // Packets (2000 = 125 packets of 16) find what single rays find: the same
+            // triangle, t within 1e-5 relative (Embree's packet and single-ray kernels may
+            // round the intersection differently by a few ULPs).
+            let mut many = vec![None; rays.len()];
+            accel.intersect_many(&rays, |_, _, _| true, &mut many);
+            let mut blocked = vec![false; rays.len()];
+            accel.occluded_many(&rays, |_, _, _| true, &mut blocked);
+            for (k, ray) in rays.iter().enumerate() {
+                let one = accel.intersect(ray, |_, _, _| true);
+                match (one, many[k]) {
+                    (None, None) => {}
+                    (Some(a), Some(b)) => {
+                        assert_eq!((a.tri, a.instance), (b.tri, b.instance), "ray {k}");
+                        assert!((a.t - b.t).abs() <= 1e-5 * a.t.max(1.0), "ray {k}");
+                    }
+                    (a, b) => panic!("ray {k}: single {a:?} vs packet {b:?}"),
+                }
+                assert_eq!(blocked[k], one.is_some(), "ray {k}");
+            }
+            if !own && *embree::backend() == embree::Backend::Embree {
+                assert!(accel.embree_tlas.is_some());
+            }
         }
     }
 }
@@ -520,6 +782,11 @@ mod tiny_tests {
                 "{d}: {h:?}"
             );
             assert_eq!(a.occluded(&Ray::new(o, d), |_, _, _| true), d != -Vec3::X);
+            let (mut many, mut blocked) = ([None], [false]);
+            a.intersect_many(&[Ray::new(o, d)], |_, _, _| true, &mut many);
+            a.occluded_many(&[Ray::new(o, d)], |_, _, _| true, &mut blocked);
+            assert_eq!(many[0].is_some(), d != -Vec3::X);
+            assert_eq!(blocked[0], d != -Vec3::X);
         }
     }
 }

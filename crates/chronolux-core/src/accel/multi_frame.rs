@@ -514,10 +514,28 @@ mod tests {
                 match (got, want) {
                     (None, None) => {}
                     (Some(g), Some(h)) => {
-                        assert_eq!(g.t, h.t, "ray {k} frame {j}");
+                        // On the own BVH both answers come from the same code and are equal
+                        // bit for bit. On Embree the frame's query transforms the ray into
+                        // a moved instance with Embree's own inverse, the window with ours:
+                        // t and the barycentrics then differ by float rounding of the
+                        // transform (relative 1e-5 bounds a few ULPs of the 4×4 product at
+                        // these magnitudes, ~10 scene units), never the triangle.
+                        let own = *crate::accel::embree::backend()
+                            != crate::accel::embree::Backend::Embree;
+                        if own {
+                            assert_eq!(g.t, h.t, "ray {k} frame {j}");
+                            assert_eq!((g.b1, g.b2), (h.b1, h.b2));
+                        } else {
+                            assert!(
+                                (g.t - h.t).abs() <= 1e-5 * h.t.max(1.0),
+                                "ray {k} frame {j}: {} vs {}",
+                                g.t,
+                                h.t
+                            );
+                            assert!((g.b1 - h.b1).abs() <= 1e-4 && (g.b2 - h.b2).abs() <= 1e-4);
+                        }
                         assert_eq!(g.tri, h.tri, "ray {k} frame {j}");
                         assert_eq!(g.instance, h.instance, "ray {k} frame {j}");
-                        assert_eq!((g.b1, g.b2), (h.b1, h.b2));
                     }
                     (g, h) => panic!("ray {k} frame {j}: window {g:?} vs frame {h:?}"),
                 }

@@ -195,6 +195,19 @@ impl FrameScene {
         self.accel.occluded(ray, |t, b1, b2| self.accept(t, b1, b2))
     }
 
+    /// Closest hits of many rays at once (`out[k]` for `rays[k]`, equal to
+    /// [`FrameScene::intersect`] on each; in packets on Embree).
+    pub fn intersect_many(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        self.accel
+            .intersect_many(rays, |t, b1, b2| self.accept(t, b1, b2), out)
+    }
+
+    /// Occlusion of many rays at once (equal to [`FrameScene::occluded`] on each).
+    pub fn occluded_many(&self, rays: &[Ray], out: &mut [bool]) {
+        self.accel
+            .occluded_many(rays, |t, b1, b2| self.accept(t, b1, b2), out)
+    }
+
     /// Surface data at a hit.
     pub fn interaction(&self, hit: &Hit, ray: &Ray) -> SurfaceInteraction {
         let mut si = self.surface_at(hit.tri, hit.instance, hit.b1, hit.b2, Some(ray.at(hit.t)));

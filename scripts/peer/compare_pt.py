@@ -7,7 +7,7 @@
       --refs /work/shared/peers/mitsuba-refs --work /tmp/cmp --out results.json
 
 For each round r and frame f, in this order: ours, then Mitsuba (each a fresh process).
-  ours:    chronolux render SCENE --frames f --spp N --resolution RxR --max-depth D
+  ours:    chronolux render SCENE --method path --no-denoise --frames f --spp N --resolution RxR --max-depth D
            --threads T --seed r --output WORK/ours_r{r}_f{f} --no-preview
            seconds = run.json's wall_s of the frame (frame build + render + EXR/PNG write;
            scene loading excluded); process_cpu_s = CPU seconds of the whole process
@@ -85,7 +85,9 @@ def main():
             od = os.path.join(a.work, f"ours_r{r}_f{f}")
             t0 = time.perf_counter()
             c0 = children_cpu_s()
-            run([a.chronolux, "render", a.scene, "--frames", str(f), "--spp", str(a.spp),
+            # The path tracer, undenoised: `render`'s defaults are spacetime-dept + OIDN.
+            run([a.chronolux, "render", a.scene, "--method", "path", "--no-denoise",
+                 "--frames", str(f), "--spp", str(a.spp),
                  "--resolution", f"{a.res}x{a.res}", "--max-depth", str(a.max_depth),
                  "--threads", str(a.threads), "--seed", str(r), "--output", od, "--no-preview"])
             proc_s = time.perf_counter() - t0

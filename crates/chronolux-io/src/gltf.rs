@@ -168,6 +168,9 @@ fn parse_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
     }
 }
 
+/// The load in phases: container, JSON with the channel repair, version and extensions,
+/// the index checks gltf-json would panic on, gltf-json's validation and ours, then the
+/// [`Loader`].
 fn load_impl(
     bytes: &[u8],
     base_dir: Option<&Path>,
@@ -183,42 +186,22 @@ fn load_impl(
     } else {
         (bytes, None)
     };
-    // Animation channels without `target.node` are valid glTF (the node may be set by an
-    // extension) but gltf-json requires the field: such channels are dropped here, from the
-    // raw JSON, with one warning each; `channel_index` keeps the original indices for the
-    // messages about the remaining channels.
-    let mut warnings = Vec::new();
-    let (root, channel_index): (json::Root, Vec<Vec<usize>>) = {
-        let mut value: serde_json::Value =
-            serde_json::from_slice(json_bytes).map_err(|e| not_gltf(e.to_string()))?;
-        let (dropped, channel_index) = drop_channels_without_node(&mut value);
-        let root = if dropped.is_empty() {
-            // Unchanged document: parse the bytes so errors keep their line and column.
-            serde_json::from_slice(json_bytes)
-        } else {
-            serde_json::from_value(value)
-        }
-        .map_err(|e| not_gltf(e.to_string()))?;
-        for p in dropped {
-            warnings.push(format!(
-                "{p}: channel has no target.node (allowed only for extensions); ignored"
-            ));
-        }
-        (root, channel_index)
-    };
+    let (root, channel_index, mut warnings) = parse_root(json_bytes).map_err(not_gltf)?;
     if !root.asset.version.starts_with("2.") {
         return Err(not_gltf(format!(
             "asset.version is \"{}\", expected 2.x",
             root.asset.version
         )));
     }
-    for ext in &root.extensions_required {
-        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
-            return Err(LoadError::UnsupportedExtension {
-                file,
-                extension: ext.clone(),
-            });
-        }
+    if let Some(ext) = root
+        .extensions_required
+        .iter()
+        .find(|e| !SUPPORTED_EXTENSIONS.contains(&e.as_str()))
+    {
+        return Err(LoadError::UnsupportedExtension {
+            file,
+            extension: ext.clone(),
+        });
     }
     for ext in &root.extensions_used {
         if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
@@ -227,7 +210,70 @@ fn load_impl(
             ));
         }
     }
-    let mut errors: Vec<(String, String)> = Vec::new();
+    if let Some((json_path, reason)) = unchecked_indices(&root) {
+        return Err(LoadError::Invalid {
+            file,
+            json_path,
+            reason,
+        });
+    }
+    let errors = validation_errors(&root, &channel_index);
+    if let Some((p, e)) = errors.first() {
+        let more = if errors.len() > 1 {
+            format!(" (and {} more problems)", errors.len() - 1)
+        } else {
+            String::new()
+        };
+        return Err(LoadError::Invalid {
+            file,
+            json_path: p.clone(),
+            reason: format!("invalid glTF: {e}{more}"),
+        });
+    }
+    let doc = gltf::Document::from_json_without_validation(root);
+    let mut loader = Loader {
+        file,
+        doc: &doc,
+        base_dir,
+        buffers: Vec::new(),
+        warnings,
+        channel_index,
+    };
+    loader.load_buffers(blob)?;
+    let mut desc = loader.build()?;
+    desc.name = name.to_string();
+    Ok(desc)
+}
+
+/// The typed document, per animation the original index of each channel kept, and the
+/// warnings so far.
+type ParsedRoot = (json::Root, Vec<Vec<usize>>, Vec<String>);
+
+/// [`ParsedRoot`] from the JSON bytes. Animation channels without `target.node` are valid glTF (the node may
+/// be set by an extension) but gltf-json requires the field: such channels are dropped
+/// here, from the raw JSON, with one warning each; the channel indices keep the original
+/// numbers for the messages about the remaining channels.
+fn parse_root(json_bytes: &[u8]) -> Result<ParsedRoot, String> {
+    let mut value: serde_json::Value =
+        serde_json::from_slice(json_bytes).map_err(|e| e.to_string())?;
+    let (dropped, channel_index) = drop_channels_without_node(&mut value);
+    let root = if dropped.is_empty() {
+        // Unchanged document: parse the bytes so errors keep their line and column.
+        serde_json::from_slice(json_bytes)
+    } else {
+        serde_json::from_value(value)
+    }
+    .map_err(|e| e.to_string())?;
+    let warnings = dropped
+        .into_iter()
+        .map(|p| format!("{p}: channel has no target.node (allowed only for extensions); ignored"))
+        .collect();
+    Ok((root, channel_index, warnings))
+}
+
+/// The first of the indices gltf and gltf-json use before (or without) validating them,
+/// as (JSON path, reason).
+fn unchecked_indices(root: &json::Root) -> Option<(String, String)> {
     // gltf-json's own validation indexes `accessors` with a primitive's POSITION index
     // before checking it (gltf-json-1.4.1/src/mesh.rs:151): check it first.
     for (mi, m) in root.meshes.iter().enumerate() {
@@ -237,35 +283,34 @@ fn load_impl(
                 .get(&Checked::Valid(json::mesh::Semantic::Positions))
                 && a.value() >= root.accessors.len()
             {
-                return Err(LoadError::Invalid {
-                    file,
-                    json_path: format!("meshes[{mi}].primitives[{pi}].attributes.POSITION"),
-                    reason: format!(
+                return Some((
+                    format!("meshes[{mi}].primitives[{pi}].attributes.POSITION"),
+                    format!(
                         "accessor index {} out of bounds ({} accessors)",
                         a.value(),
                         root.accessors.len()
                     ),
-                });
+                ));
             }
         }
     }
     // `gltf::Image::source` unwraps the URI when there is no buffer view, and the MIME type
     // when there is one (gltf-1.4.1/src/image.rs:124-128); neither is validated.
-    for (ii, im) in root.images.iter().enumerate() {
+    root.images.iter().enumerate().find_map(|(ii, im)| {
         let reason = match (&im.buffer_view, &im.uri, &im.mime_type) {
             (None, None, _) => Some("image has neither uri nor bufferView"),
             (Some(_), _, None) => Some("image in a bufferView needs a mimeType"),
             _ => None,
         };
-        if let Some(reason) = reason {
-            return Err(LoadError::Invalid {
-                file,
-                json_path: format!("images[{ii}]"),
-                reason: reason.into(),
-            });
-        }
-    }
-    root.validate(&root, json::Path::new, &mut |path, err| {
+        reason.map(|r| (format!("images[{ii}]"), r.to_string()))
+    })
+}
+
+/// gltf-json's validation (less what we are lenient about) and the animation-target
+/// checks it lacks, as (JSON path, problem).
+fn validation_errors(root: &json::Root, channel_index: &[Vec<usize>]) -> Vec<(String, String)> {
+    let mut errors: Vec<(String, String)> = Vec::new();
+    root.validate(root, json::Path::new, &mut |path, err| {
         use json::validation::Error as E;
         let p = path().to_string();
         // Required extensions were checked above (with our own list); POSITION min/max are
@@ -311,31 +356,7 @@ fn load_impl(
             }
         }
     }
-    if let Some((p, e)) = errors.first() {
-        let more = if errors.len() > 1 {
-            format!(" (and {} more problems)", errors.len() - 1)
-        } else {
-            String::new()
-        };
-        return Err(LoadError::Invalid {
-            file,
-            json_path: p.clone(),
-            reason: format!("invalid glTF: {e}{more}"),
-        });
-    }
-    let doc = gltf::Document::from_json_without_validation(root);
-    let mut loader = Loader {
-        file,
-        doc: &doc,
-        base_dir,
-        buffers: Vec::new(),
-        warnings,
-        channel_index,
-    };
-    loader.load_buffers(blob)?;
-    let mut desc = loader.build()?;
-    desc.name = name.to_string();
-    Ok(desc)
+    errors
 }
 
 struct Loader<'a> {

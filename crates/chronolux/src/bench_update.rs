@@ -35,7 +35,9 @@ use chronolux_core::scene::desc::{AnimationId, Material, MaterialId, SceneDesc, 
 use chronolux_core::scene::frame::{FrameBuilder, FrameScene};
 use chronolux_core::scene::stage::{ROOM_HALF, cube_primitive};
 use chronolux_render::framework::run::cpu_seconds;
-use chronolux_render::kernels::elements::element_map::{ElementAccumulators, FrameElements};
+use chronolux_render::kernels::elements::element_map::{
+    ElementAccumulators, ElementMesh, FrameElements,
+};
 use chronolux_render::kernels::elements::reconstruct::{Filter, Neighbours, filter_with};
 use chronolux_render::registry;
 use chronolux_render::techniques::spt::pool::{Budget, SptState};
@@ -224,20 +226,8 @@ fn run_in_pool(a: UpdateArgs) -> Result<()> {
     let input = scene_input::load(&a.scene)?;
     let (sa, sb, what) = configurations(&input, &a.change)?;
     let (sa, sb) = (Arc::new(sa), Arc::new(sb));
-    let tech = registry::find("spt").map_err(anyhow::Error::msg)?;
-    let mut sets: Vec<(String, Value)> = vec![("photons".into(), Value::from(a.photons))];
-    for s in &a.sets {
-        let (k, v) = s
-            .split_once('=')
-            .with_context(|| format!("--set takes KEY=VALUE, not '{s}'"))?;
-        sets.push((k.into(), registry::parse_value(v)));
-    }
-    let settings_json = registry::resolve(tech, None, &sets).map_err(anyhow::Error::msg)?;
-    let base: SptSettings = serde_json::from_value(settings_json.clone())?;
-    let mesh = chronolux_render::kernels::elements::element_map::ElementMesh::build(
-        &sa,
-        base.elements_per_diagonal(),
-    );
+    let (settings_json, base) = spt_settings(&a)?;
+    let mesh = ElementMesh::build(&sa, base.elements_per_diagonal());
     if !mesh.matches(&sb) || sa.lights.len() != sb.lights.len() {
         bail!("the change alters the scene's topology; spt cannot update across it");
     }
@@ -287,67 +277,19 @@ fn run_in_pool(a: UpdateArgs) -> Result<()> {
         ("random", Order::Random),
         ("scratch", Order::Scratch),
     ] {
-        let s = SptSettings {
-            order,
-            ..base.clone()
-        };
-        let mut st = SptState::new_on_mesh(sa.clone(), s, mesh.clone());
-        let before = m.of_state(&st);
-        let (c0, w0) = (cpu_seconds().unwrap_or(f64::NAN), Instant::now());
-        let inv = st.invalidate(sb.clone(), &changes);
-        let (mut cpu, mut wall) = (
-            cpu_seconds().unwrap_or(f64::NAN) - c0,
-            w0.elapsed().as_secs_f64(),
+        let (rec, cross) = measure_order(
+            &m,
+            (&sa, &sb),
+            &changes,
+            SptSettings {
+                order,
+                ..base.clone()
+            },
+            &mesh,
+            (z, threshold),
         );
-        let mut photons = inv.photons_traced;
-        let mut curve = vec![Point {
-            photons,
-            cpu_s: cpu,
-            wall_s: wall,
-            error: m.of_state(&st),
-        }];
-        let mut step = (z / 1000).max(1);
-        while st.queue_len() > 0 {
-            let (c0, w0) = (cpu_seconds().unwrap_or(f64::NAN), Instant::now());
-            let d = st.drain(Budget {
-                photons: step,
-                time: None,
-            });
-            cpu += cpu_seconds().unwrap_or(f64::NAN) - c0;
-            wall += w0.elapsed().as_secs_f64();
-            photons += d.photons_traced;
-            if d.groups_reshot == 0 {
-                // A group larger than the step: widen it.
-                step *= 2;
-                continue;
-            }
-            curve.push(Point {
-                photons,
-                cpu_s: cpu,
-                wall_s: wall,
-                error: m.of_state(&st),
-            });
-            step = (step as f64 * 1.3).ceil() as u64;
-        }
-        let cross = crossing(&curve, threshold);
         to_threshold.insert(name, cross);
-        results.insert(
-            name.into(),
-            json!({
-                "error_before_change": before,
-                "groups_invalidated": inv.groups_invalidated,
-                "groups_by_pilots": inv.groups_by_pilots,
-                "groups_by_scan": inv.groups_by_scan,
-                "pilots_traced": inv.pilots_traced,
-                "photons_total": photons,
-                "cpu_s_total": cpu,
-                "wall_s_total": wall,
-                "final_error": curve.last().map(|p| p.error),
-                "cpu_s_to_clean": cross.map(|c| c.0),
-                "photons_to_clean": cross.map(|c| c.1),
-                "curve": curve,
-            }),
-        );
+        results.insert(name.into(), rec);
     }
     let ratio = |x: &str, y: &str, k: usize| -> Value {
         match (to_threshold[x], to_threshold[y]) {
@@ -379,30 +321,126 @@ fn run_in_pool(a: UpdateArgs) -> Result<()> {
     if a.json {
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
-        println!(
-            "bench update: {} — {} ({} photons in {} groups)",
-            input.source, what, z, groups
-        );
-        println!(
-            "steady-state error {:.4}, clean below {:.4}",
-            steady, threshold
-        );
-        for name in ["priority", "random", "scratch"] {
-            let r = &out["orders"][name];
-            println!(
-                "  {name:9} invalidated {:>6} groups; clean after {} CPU s / {} photons; total {:.3} CPU s, {} photons, final error {:.4}",
-                r["groups_invalidated"],
-                r["cpu_s_to_clean"],
-                r["photons_to_clean"],
-                r["cpu_s_total"].as_f64().unwrap_or(f64::NAN),
-                r["photons_total"],
-                r["final_error"].as_f64().unwrap_or(f64::NAN)
-            );
-        }
-        println!(
-            "speedup_vs_random {}, speedup_vs_scratch {}",
-            out["speedup_vs_random"], out["speedup_vs_scratch"]
-        );
+        print_text(&out, &input.source, &what, z, groups, steady, threshold);
     }
     Ok(())
+}
+
+/// spt's settings for the bench (`--photons`, then every `--set`), as JSON and typed.
+fn spt_settings(a: &UpdateArgs) -> Result<(Value, SptSettings)> {
+    let tech = registry::find("spt").map_err(anyhow::Error::msg)?;
+    let mut sets: Vec<(String, Value)> = vec![("photons".into(), Value::from(a.photons))];
+    for s in &a.sets {
+        let (k, v) = s
+            .split_once('=')
+            .with_context(|| format!("--set takes KEY=VALUE, not '{s}'"))?;
+        sets.push((k.into(), registry::parse_value(v)));
+    }
+    let settings_json = registry::resolve(tech, None, &sets).map_err(anyhow::Error::msg)?;
+    let base: SptSettings = serde_json::from_value(settings_json.clone())?;
+    Ok((settings_json, base))
+}
+
+/// One update order: the state converged on `sa`, invalidated by the change to `sb`, then
+/// drained in growing steps while the error is measured. Returns its record and where it
+/// first falls below `threshold` (CPU s, photons). `(z, threshold)`: the pool's photons
+/// and the clean threshold.
+fn measure_order(
+    m: &ErrorMeasure,
+    (sa, sb): (&Arc<FrameScene>, &Arc<FrameScene>),
+    changes: &FrameDelta,
+    s: SptSettings,
+    mesh: &ElementMesh,
+    (z, threshold): (u64, f64),
+) -> (Value, Option<(f64, f64)>) {
+    let mut st = SptState::new_on_mesh(sa.clone(), s, mesh.clone());
+    let before = m.of_state(&st);
+    let (c0, w0) = (cpu_seconds().unwrap_or(f64::NAN), Instant::now());
+    let inv = st.invalidate(sb.clone(), changes);
+    let (mut cpu, mut wall) = (
+        cpu_seconds().unwrap_or(f64::NAN) - c0,
+        w0.elapsed().as_secs_f64(),
+    );
+    let mut photons = inv.photons_traced;
+    let mut curve = vec![Point {
+        photons,
+        cpu_s: cpu,
+        wall_s: wall,
+        error: m.of_state(&st),
+    }];
+    let mut step = (z / 1000).max(1);
+    while st.queue_len() > 0 {
+        let (c0, w0) = (cpu_seconds().unwrap_or(f64::NAN), Instant::now());
+        let d = st.drain(Budget {
+            photons: step,
+            time: None,
+        });
+        cpu += cpu_seconds().unwrap_or(f64::NAN) - c0;
+        wall += w0.elapsed().as_secs_f64();
+        photons += d.photons_traced;
+        if d.groups_reshot == 0 {
+            // A group larger than the step: widen it.
+            step *= 2;
+            continue;
+        }
+        curve.push(Point {
+            photons,
+            cpu_s: cpu,
+            wall_s: wall,
+            error: m.of_state(&st),
+        });
+        step = (step as f64 * 1.3).ceil() as u64;
+    }
+    let cross = crossing(&curve, threshold);
+    let rec = json!({
+        "error_before_change": before,
+        "groups_invalidated": inv.groups_invalidated,
+        "groups_by_pilots": inv.groups_by_pilots,
+        "groups_by_scan": inv.groups_by_scan,
+        "pilots_traced": inv.pilots_traced,
+        "photons_total": photons,
+        "cpu_s_total": cpu,
+        "wall_s_total": wall,
+        "final_error": curve.last().map(|p| p.error),
+        "cpu_s_to_clean": cross.map(|c| c.0),
+        "photons_to_clean": cross.map(|c| c.1),
+        "curve": curve,
+    });
+    (rec, cross)
+}
+
+/// The text report of `run_in_pool`'s JSON document.
+fn print_text(
+    out: &Value,
+    source: &str,
+    what: &str,
+    z: u64,
+    groups: u64,
+    steady: f64,
+    threshold: f64,
+) {
+    println!(
+        "bench update: {} — {} ({} photons in {} groups)",
+        source, what, z, groups
+    );
+    println!(
+        "steady-state error {:.4}, clean below {:.4}",
+        steady, threshold
+    );
+    for name in ["priority", "random", "scratch"] {
+        let r = &out["orders"][name];
+        println!(
+            "  {name:9} invalidated {:>6} groups; clean after {} CPU s / {} photons; total {:.3} CPU s, {} photons, final error {:.4}",
+            r["groups_invalidated"],
+            r["cpu_s_to_clean"],
+            r["photons_to_clean"],
+            r["cpu_s_total"].as_f64().unwrap_or(f64::NAN),
+            r["photons_total"],
+            r["final_error"].as_f64().unwrap_or(f64::NAN)
+        );
+    }
+    println!(
+        "speedup_vs_random {}, speedup_vs_scratch {}",
+        out["speedup_vs_random"], out["speedup_vs_scratch"]
+    );
 }

@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Issue 38 in one run: the ray-query backends (Embree, the own BVH) against Mitsuba 3 on the
+# same rays, and the path tracer's efficiency against Mitsuba on cornell-moving with each
+# backend. Rounds interleaved (ours own BVH, ours Embree, Mitsuba), so all three see the
+# same machine state.
+#
+#   VENV=/work/.venv-peers scripts/bench_ray_backend.sh OUT_DIR [ROUNDS]
+#
+# VENV: a virtual environment with scripts/peer/requirements-nobpy.txt (Mitsuba 3, flip).
+set -euo pipefail
+OUT=${1:?usage: bench_ray_backend.sh OUT_DIR [ROUNDS]}
+ROUNDS=${2:-3}
+VENV=${VENV:-/work/.venv-peers}
+HERE=$(cd "$(dirname "$0")" && pwd)
+BIN=${BIN:-$HERE/../target/release/chronolux}
+SCENE=${SCENE:-$HERE/../../shared/peers/cornell-moving.glb}
+REFS=${REFS:-$HERE/../../shared/peers/mitsuba-refs}
+mkdir -p "$OUT/rays"
+{ date -u; lscpu | grep -E "Model name|Flags"; uptime; git -C "$HERE/.." rev-parse HEAD; } > "$OUT/machine.txt"
+"$BIN" bench rays "$SCENE" --rays 1000000 --threads 2 --rounds 1 --dump-rays "$OUT/rays" > /dev/null
+for r in $(seq 1 "$ROUNDS"); do
+    for accel in bvh embree; do
+        CHRONOLUX_ACCEL=$accel "$BIN" bench rays "$SCENE" --rays 1000000 --threads 2 --rounds 1 --json \
+            > "$OUT/rays_${accel}_r$r.json"
+    done
+    for set in box hemi; do
+        "$VENV/bin/python" "$HERE/peer/mitsuba_rays.py" --scene "$SCENE" --frame 0 --threads 2 \
+            --rays "$OUT/rays/cornell-moving_$set.rays" --reps 1 | tail -1 > "$OUT/rays_mitsuba_${set}_r$r.json"
+    done
+done
+for accel in embree bvh; do
+    CHRONOLUX_ACCEL=$accel "$VENV/bin/python" "$HERE/peer/compare_pt.py" --chronolux "$BIN" \
+        --scene "$SCENE" --frames 0,12 --rounds "$ROUNDS" --spp 64 --res 256 --max-depth 8 \
+        --threads 2 --refs "$REFS" --work "$OUT/pt_$accel" --out "$OUT/pt_$accel.json" > /dev/null
+done
+uptime >> "$OUT/machine.txt"
+"$VENV/bin/python" - "$OUT" "$ROUNDS" <<'PY'
+import json, statistics, sys
+out, rounds = sys.argv[1], int(sys.argv[2])
+med = statistics.median
+for s in ["box", "hemi"]:
+    mit = [json.load(open(f"{out}/rays_mitsuba_{s}_r{r}.json")) for r in range(1, rounds + 1)]
+    mc = med(m["ray_intersect_preliminary"]["mrays_per_s"] for m in mit)
+    ms = med(m["ray_test"]["mrays_per_s"] for m in mit)
+    for accel in ["bvh", "embree"]:
+        ours = [json.load(open(f"{out}/rays_{accel}_r{r}.json"))["scenes"][0]["sets"][s] for r in range(1, rounds + 1)]
+        row = {k: med(o[k]["mrays_per_s_median"] for o in ours) for k in ["closest", "shadow", "closest_packets", "shadow_packets"]}
+        print(f"{s} {accel}: closest {row['closest']:.2f} ({row['closest']/mc:.2f}x), shadow {row['shadow']:.2f} ({row['shadow']/ms:.2f}x), "
+              f"packets {row['closest_packets']:.2f} ({row['closest_packets']/mc:.2f}x) / {row['shadow_packets']:.2f} ({row['shadow_packets']/ms:.2f}x); Mitsuba {mc:.2f} / {ms:.2f}")
+for accel in ["embree", "bvh"]:
+    d = json.load(open(f"{out}/pt_{accel}.json"))
+    for f, v in d["summary"].items():
+        r = v["ratio_ours_over_mitsuba"]
+        print(f"path {accel} {f}: ours {v['chronolux']['seconds']:.2f} s relMSE {v['chronolux']['relmse']:.2e}, "
+              f"Mitsuba {v['mitsuba']['seconds']:.2f} s relMSE {v['mitsuba']['relmse']:.2e}; efficiency ratio "
+              f"{r['efficiency_median']:.2f} (wall), CPU per round {[round(x, 2) for x in r['efficiency_cpu_per_round']]}")
+PY

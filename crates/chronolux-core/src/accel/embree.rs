@@ -44,6 +44,7 @@ const BUFFER_TYPE_VERTEX: i32 = 1;
 const FORMAT_UINT3: i32 = 0x5003;
 const FORMAT_FLOAT3: i32 = 0x9003;
 const FORMAT_FLOAT3X4_COLUMN_MAJOR: i32 = 0x9234;
+const BUILD_QUALITY_MEDIUM: i32 = 1;
 const BUILD_QUALITY_HIGH: i32 = 2;
 const INVALID_ID: u32 = u32::MAX;
 
@@ -341,24 +342,34 @@ impl Drop for Scene {
 }
 
 /// The hit of a query: t, primitive, barycentrics of vertices 1 and 2, instance (or
-/// `u32::MAX` when the scene has no instance level).
+/// `u32::MAX` when the scene has no instance level) and geometry id in its scene.
 pub struct RawHit {
     pub t: f32,
     pub prim: u32,
     pub u: f32,
     pub v: f32,
     pub instance: u32,
+    pub geom: u32,
 }
 
 impl Scene {
     /// A scene over a triangle soup (`tris[i]` is primitive *i*), or `None` if Embree is not
     /// the backend or the build failed (the caller keeps its own BVH).
     pub fn triangles(tris: &[[[f32; 3]; 3]]) -> Option<Scene> {
+        Self::soups(&[(0, tris)], BUILD_QUALITY_HIGH)
+    }
+
+    /// A flat scene of several soups, `(geometry id, triangles)`: hits report the id as
+    /// [`RawHit::geom`]. Built at Embree's default (medium) quality: it is made per frame.
+    pub fn flat(soups: &[(u32, &[[[f32; 3]; 3]])]) -> Option<Scene> {
+        Self::soups(soups, BUILD_QUALITY_MEDIUM)
+    }
+
+    fn soups(soups: &[(u32, &[[[f32; 3]; 3]])], quality: i32) -> Option<Scene> {
         let api = api()?;
-        if tris.is_empty() || tris.len() > (u32::MAX / 3) as usize {
+        if soups.iter().any(|(_, t)| t.len() > (u32::MAX / 3) as usize) {
             return None;
         }
-        let n = tris.len();
         // SAFETY: every handle below comes from the call before it; the buffers are
         // Embree-allocated with exactly the sizes written.
         unsafe {
@@ -366,37 +377,42 @@ impl Scene {
             if scene.is_null() {
                 return None;
             }
-            (api.set_scene_build_quality)(scene, BUILD_QUALITY_HIGH);
-            let geom = (api.new_geometry)(api.device, GEOMETRY_TYPE_TRIANGLE);
-            let verts = (api.set_new_geometry_buffer)(
-                geom,
-                BUFFER_TYPE_VERTEX,
-                0,
-                FORMAT_FLOAT3,
-                12,
-                3 * n,
-            ) as *mut [f32; 3];
-            let index =
-                (api.set_new_geometry_buffer)(geom, BUFFER_TYPE_INDEX, 0, FORMAT_UINT3, 12, n)
-                    as *mut [u32; 3];
-            if geom.is_null() || verts.is_null() || index.is_null() {
-                if !geom.is_null() {
-                    (api.release_geometry)(geom);
+            (api.set_scene_build_quality)(scene, quality);
+            for (id, tris) in soups.iter().filter(|(_, t)| !t.is_empty()) {
+                let n = tris.len();
+                let geom = (api.new_geometry)(api.device, GEOMETRY_TYPE_TRIANGLE);
+                if geom.is_null() {
+                    (api.release_scene)(scene);
+                    return None;
                 }
-                (api.release_scene)(scene);
-                return None;
+                let verts = (api.set_new_geometry_buffer)(
+                    geom,
+                    BUFFER_TYPE_VERTEX,
+                    0,
+                    FORMAT_FLOAT3,
+                    12,
+                    3 * n,
+                ) as *mut [f32; 3];
+                let index =
+                    (api.set_new_geometry_buffer)(geom, BUFFER_TYPE_INDEX, 0, FORMAT_UINT3, 12, n)
+                        as *mut [u32; 3];
+                if verts.is_null() || index.is_null() {
+                    (api.release_geometry)(geom);
+                    (api.release_scene)(scene);
+                    return None;
+                }
+                let verts = std::slice::from_raw_parts_mut(verts, 3 * n);
+                let index = std::slice::from_raw_parts_mut(index, n);
+                for (i, t) in tris.iter().enumerate() {
+                    verts[3 * i..3 * i + 3].copy_from_slice(t);
+                    let b = 3 * i as u32;
+                    index[i] = [b, b + 1, b + 2];
+                }
+                (api.set_geometry_build_quality)(geom, quality);
+                (api.commit_geometry)(geom);
+                (api.attach_geometry_by_id)(scene, geom, *id);
+                (api.release_geometry)(geom);
             }
-            let verts = std::slice::from_raw_parts_mut(verts, 3 * n);
-            let index = std::slice::from_raw_parts_mut(index, n);
-            for (i, t) in tris.iter().enumerate() {
-                verts[3 * i..3 * i + 3].copy_from_slice(t);
-                let b = 3 * i as u32;
-                index[i] = [b, b + 1, b + 2];
-            }
-            (api.set_geometry_build_quality)(geom, BUILD_QUALITY_HIGH);
-            (api.commit_geometry)(geom);
-            (api.attach_geometry_by_id)(scene, geom, 0);
-            (api.release_geometry)(geom);
             (api.commit_scene)(scene);
             let out = Scene { raw: scene };
             ((api.get_device_error)(api.device) == 0).then_some(out)
@@ -468,6 +484,7 @@ impl Scene {
             u: rh.u,
             v: rh.v,
             instance: rh.inst_id[0],
+            geom: rh.geom_id,
         })
     }
 
@@ -533,6 +550,7 @@ impl Scene {
                 u: p.u[k],
                 v: p.v[k],
                 instance: p.inst_id[k],
+                geom: p.geom_id[k],
             });
         }
     }

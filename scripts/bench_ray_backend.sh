@@ -33,6 +33,19 @@ for accel in embree bvh; do
         --scene "$SCENE" --frames 0,12 --rounds "$ROUNDS" --spp 64 --res 256 --max-depth 8 \
         --threads 2 --refs "$REFS" --work "$OUT/pt_$accel" --out "$OUT/pt_$accel.json" > /dev/null
 done
+# The default route (`render` with nothing but the resolution) on each backend: process CPU
+# seconds of the whole 48-frame animation, interleaved.
+for r in $(seq 1 "${ROUTE_ROUNDS:-2}"); do
+    for res in 256 512; do
+        for accel in bvh embree; do
+            rm -rf "$OUT/route_tmp"
+            CHRONOLUX_ACCEL=$accel /usr/bin/time -f "route $res $accel r$r %U %S %e" -a -o "$OUT/route.txt" \
+                "$BIN" render "$SCENE" --frames 0..48 --max-depth 8 --resolution ${res}x${res} \
+                --output "$OUT/route_tmp" > /dev/null 2>&1
+        done
+    done
+done
+rm -rf "$OUT/route_tmp"
 uptime >> "$OUT/machine.txt"
 "$VENV/bin/python" - "$OUT" "$ROUNDS" <<'PY'
 import json, statistics, sys
@@ -55,3 +68,4 @@ for accel in ["embree", "bvh"]:
               f"Mitsuba {v['mitsuba']['seconds']:.2f} s relMSE {v['mitsuba']['relmse']:.2e}; efficiency ratio "
               f"{r['efficiency_median']:.2f} (wall), CPU per round {[round(x, 2) for x in r['efficiency_cpu_per_round']]}")
 PY
+awk '{cpu[$2" "$3]=cpu[$2" "$3]" "($5+$6)} END {for (k in cpu) print "route", k, "CPU s:", cpu[k]}' "$OUT/route.txt" | sort

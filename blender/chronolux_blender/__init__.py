@@ -84,19 +84,23 @@ class CHRONOLUX_PT_render(bpy.types.Panel):
 
 
 def _builtin_panels():
-    """Blender's own panels that make sense for Chronolux (dimensions, output, camera,
-    light, world): those that show for Eevee or Cycles in the properties editor."""
+    """Blender's own panels that make sense for Chronolux: output, format and frame range,
+    camera, light and world data, colour management; those that show for Eevee or Cycles.
+    Not the engines' own sampling or pass panels."""
     import bl_ui
 
+    engines = {"BLENDER_EEVEE", "BLENDER_EEVEE_NEXT", "CYCLES", "BLENDER_WORKBENCH"}
     for mod_name in ("properties_output", "properties_data_camera", "properties_data_light",
-                     "properties_world", "properties_render", "properties_view_layer"):
+                     "properties_world", "properties_render"):
         mod = getattr(bl_ui, mod_name, None)
         if mod is None:
             continue
         for name in dir(mod):
+            if mod_name == "properties_render" and "color_management" not in name.lower():
+                continue
             p = getattr(mod, name)
-            engines = getattr(p, "COMPAT_ENGINES", None)
-            if isinstance(engines, set) and engines & {"BLENDER_EEVEE", "BLENDER_EEVEE_NEXT", "CYCLES", "BLENDER_WORKBENCH"}:
+            compat = getattr(p, "COMPAT_ENGINES", None)
+            if isinstance(compat, set) and compat & engines:
                 yield p
 
 

@@ -87,8 +87,9 @@ class ChronoluxRenderEngine(bpy.types.RenderEngine):
         size = _size(scene)
         # An animation render: `self.is_animation` is set by Blender for
         # `render.render(animation=True)` (Render Animation), in the UI and headless
-        # (bpy from PyPI) alike; screen.is_animation_playing is the viewport's playback,
-        # and is_job_running('RENDER') is also true for F12.
+        # (bpy from PyPI) alike, and read on each frame's call (tested headless:
+        # blender/tests). screen.is_animation_playing is the viewport's playback, not a
+        # render; is_job_running('RENDER') does not tell a still from an animation.
         if self.is_animation:
             key = (scene.name, scene.frame_start, scene.frame_end, size, str(scene.camera and scene.camera.name))
             entry = _ANIMATION.get(key)

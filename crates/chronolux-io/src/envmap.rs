@@ -77,13 +77,13 @@ pub fn decode_hdr(bytes: &[u8]) -> Result<Image, String> {
         if l.is_empty() {
             break;
         }
-        if let Some(f) = l.strip_prefix("FORMAT=") {
-            if f.trim() != "32-bit_rle_rgbe" {
-                return Err(format!(
-                    "pixel format {} (only 32-bit_rle_rgbe, RGB, is read)",
-                    f.trim()
-                ));
-            }
+        if let Some(f) = l.strip_prefix("FORMAT=")
+            && f.trim() != "32-bit_rle_rgbe"
+        {
+            return Err(format!(
+                "pixel format {} (only 32-bit_rle_rgbe, RGB, is read)",
+                f.trim()
+            ));
         }
     }
     let res = line(&mut pos)?;

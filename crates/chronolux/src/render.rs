@@ -317,6 +317,19 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         .resolve(&method, built.separates_light())
         .map_err(anyhow::Error::msg)?;
     let input = scene_input::load(&scene_args)?;
+    if let Some(e) = &environment
+        && input
+            .desc
+            .warnings
+            .iter()
+            .any(|w| w.starts_with(chronolux_core::scene::desc::DEFAULT_ENVIRONMENT_WARNING))
+    {
+        // The loader's warning above names the default sky; the map replaces it.
+        log::warn!(
+            "--environment {}: lights the scene instead of that default environment",
+            e.file
+        );
+    }
     let last = last_frame(&input.desc, input.animation, fps);
     let frames = match requested_frames {
         Some(f) => f,

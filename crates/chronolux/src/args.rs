@@ -119,6 +119,37 @@ pub struct RenderArgs {
     /// Do not write the animated preview.
     #[arg(long)]
     pub no_preview: bool,
+    /// Light the scene with an environment map: an equirectangular (latitude-longitude)
+    /// image of linear radiance, OpenEXR (.exr) or Radiance HDR (.hdr). Its top row is
+    /// straight up (+Y), its centre column looks along +X and the column a quarter across
+    /// along -Z (as Blender's Environment Texture in a scene exported to glTF). It replaces
+    /// the default sky of a scene without lights and adds to a scene's own lights; camera
+    /// rays see it (unless --environment-hidden). Importance-sampled by its luminance.
+    #[arg(long, value_name = "FILE.exr|FILE.hdr")]
+    pub environment: Option<PathBuf>,
+    /// Multiplier of the environment map's radiance (Blender's Background strength),
+    /// finite and ≥ 0. Default 1.
+    #[arg(
+        long,
+        value_name = "S",
+        allow_negative_numbers = true,
+        requires = "environment"
+    )]
+    pub environment_strength: Option<f32>,
+    /// Rotation of the environment map about the up axis (+Y) in degrees: the map is looked
+    /// up at each direction turned by this angle, as Blender's Mapping node (type Point)
+    /// rotating about Z. Default 0.
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_negative_numbers = true,
+        requires = "environment"
+    )]
+    pub environment_rotation: Option<f32>,
+    /// Camera rays that leave the scene see black instead of the environment map (it still
+    /// lights the scene and shows in reflections and refractions).
+    #[arg(long, requires = "environment")]
+    pub environment_hidden: bool,
     /// Render passes written as layers of each frame's EXR (Blender's multilayer names):
     /// `albedo` (ViewLayer.Denoising Albedo), `normal` (ViewLayer.Denoising Normal, world
     /// space), `depth` (ViewLayer.Depth, distance along the camera ray), `motion`

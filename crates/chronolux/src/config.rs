@@ -56,6 +56,45 @@ pub struct RunConfig {
     /// technique's own defaults; see `registry::quality_settings`).
     #[serde(default)]
     pub quality: Option<String>,
+    /// The environment map that lights the scene (`--environment`); `null`: the scene's
+    /// own lights (or its default sky).
+    #[serde(default)]
+    pub environment: Option<EnvironmentConfig>,
+}
+
+/// An environment map as run.json records it.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct EnvironmentConfig {
+    /// The image (.exr or .hdr), as an absolute path where it could be resolved.
+    pub file: String,
+    /// Radiance multiplier.
+    pub strength: f32,
+    /// Rotation about +Y, degrees.
+    pub rotation_deg: f32,
+    /// Whether camera rays see black instead of the map.
+    pub hidden: bool,
+}
+
+impl EnvironmentConfig {
+    /// Reads the map: a clear error for a missing or malformed file, a bad strength or
+    /// rotation.
+    pub fn load(&self) -> Result<chronolux_core::light::Environment> {
+        let image = chronolux_io::envmap::read_environment(&self.file)
+            .with_context(|| "cannot use --environment".to_string())?;
+        let map = chronolux_core::light::EnvMap::new(
+            image.width as usize,
+            image.height as usize,
+            image.pixels,
+            self.strength,
+            self.rotation_deg,
+        )
+        .map_err(|e| anyhow::anyhow!("--environment {}: {e}", self.file))?;
+        Ok(chronolux_core::light::Environment::from_map(
+            map,
+            !self.hidden,
+        ))
+    }
 }
 
 /// A `--config` file: a `run.json` (its `settings` are a [`RunConfig`]), a `RunConfig`
@@ -86,6 +125,7 @@ pub struct PartialRun {
     pub denoise_quality: Option<crate::denoise::DenoiseQuality>,
     pub quality: Option<String>,
     pub view: Option<chronolux_io::image::View>,
+    pub environment: Option<EnvironmentConfig>,
     /// Recorded in run.json (the automatic exposure found), not a setting: a replay
     /// measures it again, identically.
     #[serde(default, rename = "auto_exposure")]

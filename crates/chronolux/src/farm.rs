@@ -271,6 +271,7 @@ pub fn render_segment(args: RenderArgs) -> Result<()> {
         ("--quality", args.quality.is_some()),
         ("--denoise-quality", args.denoise_quality.is_some()),
         ("--view", args.view.is_some()),
+        ("--environment", args.environment.is_some()),
     ]
     .into_iter()
     .filter(|(_, g)| *g)

@@ -175,6 +175,32 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         bail!("--exposure must be a finite number of stops");
     }
     let view = args.view.or(prev.view).unwrap_or_default();
+    let environment = match &args.environment {
+        Some(file) => {
+            let strength = args.environment_strength.unwrap_or(1.0);
+            if !(strength.is_finite() && strength >= 0.0) {
+                bail!("--environment-strength must be a finite number ≥ 0, not {strength}");
+            }
+            let rotation_deg = args.environment_rotation.unwrap_or(0.0);
+            if !rotation_deg.is_finite() {
+                bail!("--environment-rotation must be a finite number of degrees");
+            }
+            if !file.is_file() {
+                bail!(
+                    "--environment {}: no such file (an .exr or .hdr equirectangular map)",
+                    file.display()
+                );
+            }
+            let file = std::fs::canonicalize(file).unwrap_or_else(|_| file.clone());
+            Some(crate::config::EnvironmentConfig {
+                file: file.display().to_string(),
+                strength,
+                rotation_deg,
+                hidden: args.environment_hidden,
+            })
+        }
+        None => prev.environment.clone(),
+    };
     let shutter = args.shutter.or(prev.shutter).unwrap_or(0.0);
     chronolux_render::framework::technique::check_shutter(shutter).map_err(anyhow::Error::msg)?;
     let mut flags = Vec::new();
@@ -291,6 +317,19 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         .resolve(&method, built.separates_light())
         .map_err(anyhow::Error::msg)?;
     let input = scene_input::load(&scene_args)?;
+    if let Some(e) = &environment
+        && input
+            .desc
+            .warnings
+            .iter()
+            .any(|w| w.starts_with(chronolux_core::scene::desc::DEFAULT_ENVIRONMENT_WARNING))
+    {
+        // The loader's warning above names the default sky; the map replaces it.
+        log::warn!(
+            "--environment {}: lights the scene instead of that default environment",
+            e.file
+        );
+    }
     let last = last_frame(&input.desc, input.animation, fps);
     let frames = match requested_frames {
         Some(f) => f,
@@ -357,6 +396,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
             (None, Some(_)) => None,
         },
         view,
+        environment,
     };
     Ok((config, input, denoise_skipped))
 }
@@ -374,6 +414,10 @@ struct Settled {
 
 /// Renders `config` (its scene already loaded as `input`) into `exec.output`.
 pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) -> Result<()> {
+    let mut input = input;
+    if let Some(e) = &config.environment {
+        input.desc.environment = Some(e.load()?);
+    }
     let tech = registry::find(&config.method).map_err(anyhow::Error::msg)?;
     let mut renderer = tech
         .build(
@@ -827,6 +871,7 @@ fn check_resumable(
         "camera",
         "stage",
         "scene",
+        "environment",
     ];
     let differ: Vec<String> = keys
         .iter()

@@ -137,7 +137,7 @@ impl Light {
             Light::Environment { env } => {
                 // Direction towards the environment w, the ray travels along −w from a disk
                 // perpendicular to w outside the scene's bounding sphere.
-                let w = warps::sample_uniform_sphere(u_dir);
+                let (w, pdf_dir) = env.sample_dir(u_dir)?;
                 let r = radius.max(1e-4);
                 let disk = warps::sample_concentric_disk(u_pos) * r;
                 let f = Frame::from_normal(w);
@@ -147,7 +147,7 @@ impl Light {
                     n: Vec3::ZERO,
                     le: env.radiance(w),
                     pdf_pos: 1.0 / (std::f32::consts::PI * r * r),
-                    pdf_dir: warps::UNIFORM_SPHERE_PDF,
+                    pdf_dir,
                 })
             }
         }
@@ -190,12 +190,10 @@ impl Light {
                 }
                 (1.0 / *area, pdf_dir)
             }
-            Light::Environment { .. } => {
+            Light::Environment { env } => {
+                // `d` is the ray's direction, −w.
                 let r = radius.max(1e-4);
-                (
-                    1.0 / (std::f32::consts::PI * r * r),
-                    warps::UNIFORM_SPHERE_PDF,
-                )
+                (1.0 / (std::f32::consts::PI * r * r), env.pdf_dir(-d))
             }
         }
     }
@@ -245,11 +243,33 @@ mod tests {
                 env: crate::light::Environment::uniform(Rgb::splat(0.5)),
             },
             Light::Environment {
-                env: crate::light::Environment {
-                    zenith: Rgb::splat(1.0),
-                    nadir: Rgb::splat(0.2),
-                    background: Rgb::ZERO,
-                },
+                env: crate::light::Environment::gradient(
+                    Rgb::splat(1.0),
+                    Rgb::splat(0.2),
+                    Rgb::ZERO,
+                ),
+            },
+            // An environment map with a bright patch: emission samples it by luminance.
+            Light::Environment {
+                env: crate::light::Environment::from_map(
+                    crate::light::EnvMap::new(
+                        8,
+                        4,
+                        (0..32)
+                            .map(|i| {
+                                if i == 10 {
+                                    Rgb::new(20.0, 15.0, 10.0)
+                                } else {
+                                    Rgb::splat(0.1 + (i % 3) as f32 * 0.2)
+                                }
+                            })
+                            .collect(),
+                        2.0,
+                        25.0,
+                    )
+                    .unwrap(),
+                    true,
+                ),
             },
         ];
         let mut r = Pcg32::new(5, 6);

@@ -11,8 +11,11 @@ use crate::math::{Frame, Vec2, Vec3};
 use crate::sampling::distrib::Distribution1D;
 use crate::sampling::warps;
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 pub mod emit;
+pub mod envmap;
+pub use envmap::EnvMap;
 pub mod spherical;
 use spherical::{sample_spherical_triangle, triangle_solid_angle, use_solid_angle_sampling};
 
@@ -65,11 +68,20 @@ pub enum Light {
 /// power and the emitted flux of [`Light::Environment`] keep their uniform-sphere form with
 /// that mean; uniform sphere sampling stays unbiased (the ratio of the brightest to the
 /// mean direction is at most 2).
-#[derive(Clone, Copy, Debug, PartialEq)]
+///
+/// With `map` (an equirectangular image, [`EnvMap`]) the map replaces the gradient: its
+/// radiance, its mean, and importance sampling by its luminance ([`Environment::sample_dir`],
+/// [`Environment::pdf_dir`], which every technique reaches through [`Light::sample_li`],
+/// [`Light::pdf_li`], [`Light::sample_le`] and [`Light::pdf_le`]). Camera rays see the map
+/// when `map_visible`, else `background`.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Environment {
     pub zenith: Rgb,
     pub nadir: Rgb,
     pub background: Rgb,
+    pub map: Option<Arc<EnvMap>>,
+    /// Whether camera rays that escape see the map (only with `map`).
+    pub map_visible: bool,
 }
 
 impl Environment {
@@ -79,16 +91,44 @@ impl Environment {
             zenith: radiance,
             nadir: radiance,
             background: radiance,
+            map: None,
+            map_visible: false,
+        }
+    }
+
+    /// A gradient from `nadir` to `zenith` with a constant `background`.
+    pub fn gradient(zenith: Rgb, nadir: Rgb, background: Rgb) -> Self {
+        Environment {
+            zenith,
+            nadir,
+            background,
+            map: None,
+            map_visible: false,
+        }
+    }
+
+    /// An environment map; camera rays see it when `visible`, else black.
+    pub fn from_map(map: EnvMap, visible: bool) -> Self {
+        let mean = map.mean();
+        Environment {
+            zenith: mean,
+            nadir: mean,
+            background: Rgb::ZERO,
+            map: Some(Arc::new(map)),
+            map_visible: visible,
         }
     }
 
     /// Whether every direction, and the background, have the same radiance.
     pub fn is_uniform(&self) -> bool {
-        self.zenith == self.nadir && self.background == self.zenith
+        self.map.is_none() && self.zenith == self.nadir && self.background == self.zenith
     }
 
     /// Radiance arriving from direction `w` (towards the environment; need not be unit).
     pub fn radiance(&self, w: Vec3) -> Rgb {
+        if let Some(m) = &self.map {
+            return m.eval(w);
+        }
         if self.zenith == self.nadir {
             return self.zenith;
         }
@@ -102,9 +142,38 @@ impl Environment {
         self.nadir * (1.0 - t) + self.zenith * t
     }
 
+    /// What a camera ray leaving the scene along `w` (straight or through specular
+    /// bounces only) shows: the map where it is visible, else `background`.
+    pub fn seen_by_camera(&self, w: Vec3) -> Rgb {
+        match &self.map {
+            Some(m) if self.map_visible => m.eval(w),
+            _ => self.background,
+        }
+    }
+
     /// Mean radiance over the sphere of directions.
     pub fn mean(&self) -> Rgb {
-        (self.zenith + self.nadir) * 0.5
+        match &self.map {
+            Some(m) => m.mean(),
+            None => (self.zenith + self.nadir) * 0.5,
+        }
+    }
+
+    /// Samples a direction towards the environment: by the map's luminance with a map,
+    /// uniformly over the sphere otherwise. (direction, solid-angle density).
+    pub fn sample_dir(&self, u: Vec2) -> Option<(Vec3, f32)> {
+        match &self.map {
+            Some(m) => m.sample(u),
+            None => Some((warps::sample_uniform_sphere(u), warps::UNIFORM_SPHERE_PDF)),
+        }
+    }
+
+    /// Solid-angle density with which [`Environment::sample_dir`] produces `w`.
+    pub fn pdf_dir(&self, w: Vec3) -> f32 {
+        match &self.map {
+            Some(m) => m.pdf(w),
+            None => warps::UNIFORM_SPHERE_PDF,
+        }
     }
 }
 
@@ -280,13 +349,13 @@ impl Light {
                 })
             }
             Light::Environment { env } => {
-                let wi = warps::sample_uniform_sphere(u);
+                let (wi, pdf) = env.sample_dir(u)?;
                 Some(LightSample {
                     wi,
                     p: p + wi * (4.0 * scene_radius.max(1e-3)),
                     n: Vec3::ZERO,
                     li: env.radiance(wi),
-                    pdf: warps::UNIFORM_SPHERE_PDF,
+                    pdf,
                     is_delta: false,
                     bary: Vec2::ZERO,
                 })
@@ -323,7 +392,7 @@ impl Light {
                 }
                 d2 / (cos_l.abs() * *area)
             }
-            Light::Environment { .. } => warps::UNIFORM_SPHERE_PDF,
+            Light::Environment { env } => env.pdf_dir(lp - p),
             _ => 0.0,
         }
     }

@@ -477,6 +477,13 @@ impl BitEq for crate::light::Environment {
         self.zenith.bit_eq(&o.zenith)
             && self.nadir.bit_eq(&o.nadir)
             && self.background.bit_eq(&o.background)
+            && self.map_visible == o.map_visible
+            && match (&self.map, &o.map) {
+                (None, None) => true,
+                // The same map (a scene's frames share one), or an equal one.
+                (Some(a), Some(b)) => std::sync::Arc::ptr_eq(a, b) || a == b,
+                _ => false,
+            }
     }
 }
 

@@ -51,11 +51,7 @@ pub const DEFAULT_ENVIRONMENT_WARNING: &str = "scene has no light (no punctual l
 /// 0.33; seen against a dark grey backdrop (0.05, about 25% grey after the sRGB curve) that
 /// no lit white surface matches.
 pub fn default_environment() -> crate::light::Environment {
-    crate::light::Environment {
-        zenith: Rgb::splat(1.0),
-        nadir: Rgb::splat(0.2),
-        background: Rgb::splat(0.05),
-    }
+    crate::light::Environment::gradient(Rgb::splat(1.0), Rgb::splat(0.2), Rgb::splat(0.05))
 }
 
 /// The whole scene.

@@ -341,7 +341,7 @@ impl FrameScene {
             lights: self.lights.clone(),
             light_sampler: self.light_sampler.clone(),
             emissive_base: self.emissive_base.clone(),
-            environment: self.environment,
+            environment: self.environment.clone(),
             environment_light: self.environment_light,
             camera: self.camera.clone(),
             bounds: self.bounds,
@@ -772,7 +772,7 @@ impl FrameBuilder {
             });
         }
         let mut environment_light = None;
-        if let Some(env) = self.desc.environment {
+        if let Some(env) = self.desc.environment.clone() {
             environment_light = Some(lights.len());
             lights.push(Light::Environment { env });
         }
@@ -790,7 +790,7 @@ impl FrameBuilder {
             lights,
             light_sampler,
             emissive_base,
-            environment: self.desc.environment,
+            environment: self.desc.environment.clone(),
             environment_light,
             camera,
             bounds,
@@ -878,6 +878,9 @@ pub fn light_side(lights: &[Light], bounds: Bounds3, radius: f32) -> Vec3 {
             Light::Directional { dir, .. } => -dir.normalize_or_zero(),
             Light::Triangle { p0, e1, e2, .. } => {
                 (*p0 + (*e1 + *e2) * (1.0 / 3.0) - c).normalize_or_zero()
+            }
+            Light::Environment { env } if env.map.is_some() => {
+                env.map.as_ref().map_or(Vec3::ZERO, |m| m.mean_direction())
             }
             Light::Environment { env } => {
                 let up = crate::color::luminance(env.zenith - env.nadir);

@@ -4,6 +4,7 @@ mod auto_camera;
 mod bsdf;
 mod chi2;
 mod delta;
+mod envmap;
 mod hostile;
 mod light;
 mod metrics;

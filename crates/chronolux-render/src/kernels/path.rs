@@ -101,10 +101,10 @@ impl PathTracer {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray) else {
                 // Escaped: environment light.
-                if let (Some(env), Some(ei)) = (scene.environment, scene.environment_light) {
+                if let (Some(env), Some(ei)) = (&scene.environment, scene.environment_light) {
                     if depth == 1 {
                         // The camera ray itself: the backdrop (no other strategy sees it).
-                        l[0] += beta * env.background;
+                        l[0] += beta * env.seen_by_camera(ray.d);
                     } else {
                         let w = if specular_bounce {
                             1.0

@@ -242,6 +242,28 @@ fn bdpt_agrees_with_path_tracer_with_gradient_environment_and_backdrop() {
     );
 }
 
+/// The same with an environment map (a bright patch, a dark ground, rotated): light
+/// sampling and emission by the map's luminance, and BDPT's densities of light subpaths
+/// from infinity and of escaped camera rays, all follow the map.
+#[test]
+fn bdpt_agrees_with_path_tracer_with_an_environment_map() {
+    let (w, h) = (16usize, 8usize);
+    let texels = (0..w * h)
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            if y == 2 && (5..8).contains(&x) {
+                Rgb::new(30.0, 25.0, 20.0)
+            } else if y < h / 2 {
+                Rgb::new(0.3, 0.4, 0.8)
+            } else {
+                Rgb::new(0.15, 0.1, 0.05)
+            }
+        })
+        .collect();
+    let map = chronolux_core::light::EnvMap::new(w, h, texels, 1.0, 140.0).unwrap();
+    environment_and_spot(Environment::from_map(map, true), "environment map + spot");
+}
+
 fn environment_and_spot(env: Environment, what: &str) {
     let mut d = stage::demo();
     d.environment = Some(env);

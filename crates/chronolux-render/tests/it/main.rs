@@ -8,6 +8,7 @@ mod caustic;
 mod delta;
 mod dept;
 mod determinism;
+mod envmap;
 mod furnace;
 mod icsel;
 mod light;

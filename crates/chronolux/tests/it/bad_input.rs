@@ -319,3 +319,74 @@ fn view_with_a_bad_scene_or_a_port_in_use() {
         &["not-an-address"],
     );
 }
+
+/// `--environment`: a missing file, a file that is no map, a truncated .hdr and a bad
+/// strength are one clear error each; a good .hdr renders and run.json records it.
+#[test]
+fn environment_maps() {
+    let dir = temp_dir("envmap");
+    let missing = dir.join("nowhere.hdr");
+    fails(
+        &render_demo(&["--environment", missing.to_str().unwrap()]),
+        &["--environment", "nowhere.hdr", "no such file"],
+    );
+    let text = dir.join("sky.png");
+    std::fs::write(&text, b"not an image").unwrap();
+    fails(
+        &render_demo(&["--environment", text.to_str().unwrap()]),
+        &["--environment", "OpenEXR (.exr) or Radiance HDR (.hdr)"],
+    );
+    let img = chronolux_io::image::Image::from_pixels(
+        4,
+        2,
+        (0..8)
+            .map(|i| chronolux_core::color::Rgb::splat(0.5 + i as f32))
+            .collect(),
+    );
+    let good = dir.join("sky.hdr");
+    let bytes = chronolux_io::envmap::encode_hdr(&img);
+    std::fs::write(&good, &bytes).unwrap();
+    let cut = dir.join("cut.hdr");
+    std::fs::write(&cut, &bytes[..bytes.len() - 5]).unwrap();
+    fails(
+        &render_demo(&["--environment", cut.to_str().unwrap(), "--frames", "0"]),
+        &["cut.hdr", "pixel data ends early"],
+    );
+    fails(
+        &render_demo(&[
+            "--environment",
+            good.to_str().unwrap(),
+            "--environment-strength",
+            "-2",
+        ]),
+        &["--environment-strength"],
+    );
+    fails(
+        &render_demo(&["--environment-strength", "2"]),
+        &["--environment"],
+    );
+    let out = temp_dir("envmap-out");
+    let mut args = vec![
+        "render",
+        "--output",
+        out.to_str().unwrap(),
+        "--environment",
+        good.to_str().unwrap(),
+        "--environment-strength",
+        "2",
+        "--environment-rotation",
+        "30",
+        "--environment-hidden",
+        "--frames",
+        "0",
+        "--no-preview",
+    ];
+    args.extend(FAST);
+    ok(&run(&args));
+    let m = manifest(&out);
+    let e = &m["settings"]["environment"];
+    assert!(e["file"].as_str().unwrap().ends_with("sky.hdr"), "{e}");
+    assert_eq!(e["strength"], 2.0);
+    assert_eq!(e["rotation_deg"], 30.0);
+    assert_eq!(e["hidden"], true);
+}

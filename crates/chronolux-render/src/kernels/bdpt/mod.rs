@@ -409,7 +409,7 @@ pub fn generate_light_subpath_with<T: FnMut(&Ray) -> Option<Hit>>(
             }
             path[1].pdf_fwd = p;
         }
-        path[0].pdf_fwd = vertex::infinite_light_density(scene);
+        path[0].pdf_fwd = vertex::infinite_light_density(scene, -les.ray.d);
     }
 }
 

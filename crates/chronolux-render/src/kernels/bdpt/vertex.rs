@@ -261,7 +261,8 @@ impl Vertex {
     /// position density; the directional density for lights at infinity).
     pub fn pdf_light_origin(&self, scene: &FrameScene, v: &Vertex) -> f32 {
         if self.infinite {
-            return infinite_light_density(scene);
+            // Towards the environment: from `v` to this vertex (far along the direction).
+            return infinite_light_density(scene, (self.p - v.p).normalize_or_zero());
         }
         let Some(l) = self.light_index(scene) else {
             return 0.0;
@@ -279,13 +280,15 @@ impl Vertex {
             // At infinity: the environment seen along −w; straight from the camera, the
             // backdrop (only the camera strategy sees it: no light subpath reaches a camera
             // vertex from infinity).
-            VertexKind::Light if self.infinite => scene.environment.map_or(Rgb::ZERO, |e| {
-                if v.kind == VertexKind::Camera {
-                    e.background
-                } else {
-                    e.radiance(-w)
-                }
-            }),
+            VertexKind::Light if self.infinite => {
+                scene.environment.as_ref().map_or(Rgb::ZERO, |e| {
+                    if v.kind == VertexKind::Camera {
+                        e.seen_by_camera(-w)
+                    } else {
+                        e.radiance(-w)
+                    }
+                })
+            }
             VertexKind::Surface => {
                 if self.light_index(scene).is_none() {
                     return Rgb::ZERO;
@@ -297,15 +300,13 @@ impl Vertex {
     }
 }
 
-/// Solid-angle density (times light choice) with which light sampling produces a
-/// direction towards the lights at infinity: only the uniform environment has one
-/// (directional lights are deltas).
-pub fn infinite_light_density(scene: &FrameScene) -> f32 {
-    match scene.environment_light {
-        Some(ei) => {
-            scene.light_sampler.pmf(ei) * chronolux_core::sampling::warps::UNIFORM_SPHERE_PDF
-        }
-        None => 0.0,
+/// Solid-angle density (times light choice) with which light sampling produces the
+/// direction `w` towards the lights at infinity: only the environment has one (uniform,
+/// or by its map's luminance; directional lights are deltas).
+pub fn infinite_light_density(scene: &FrameScene, w: Vec3) -> f32 {
+    match (scene.environment_light, &scene.environment) {
+        (Some(ei), Some(env)) => scene.light_sampler.pmf(ei) * env.pdf_dir(w),
+        _ => 0.0,
     }
 }
 

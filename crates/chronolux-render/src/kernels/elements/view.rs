@@ -140,10 +140,10 @@ impl DeptView<'_> {
                 if let Some(r) = reach.as_deref_mut() {
                     *r = Reach::Unbounded;
                 }
-                if let Some(env) = scene.environment {
+                if let Some(env) = &scene.environment {
                     if bounce == 0 {
                         // The camera ray itself shows the backdrop.
-                        l[0] += beta * env.background;
+                        l[0] += beta * env.seen_by_camera(ray.d);
                     } else {
                         let w = match (specular_bounce, scene.environment_light) {
                             (false, Some(ei)) => {
@@ -212,7 +212,7 @@ impl DeptView<'_> {
                                 *rr = Reach::Unbounded;
                             }
                             if let (Some(env), Some(ei)) =
-                                (scene.environment, scene.environment_light)
+                                (&scene.environment, scene.environment_light)
                             {
                                 l[s] += beta
                                     * bs.weight

@@ -141,12 +141,12 @@ impl<'a, S: IndirectSource> EyeView<'a, S> {
             let Some(hit) = scene.intersect(&ray) else {
                 if render
                     && !after_non_delta
-                    && let Some(env) = scene.environment
+                    && let Some(env) = &scene.environment
                 {
                     // The camera ray itself shows the backdrop (as in `dept`'s view).
                     l += beta
                         * if bounce == 0 {
-                            env.background
+                            env.seen_by_camera(ray.d)
                         } else {
                             env.radiance(ray.d)
                         };

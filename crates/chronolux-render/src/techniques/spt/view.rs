@@ -86,11 +86,11 @@ impl RadianceEstimator for SptView<'_> {
         for bounce in 0..=(self.max_specular_depth + self.max_glossy_depth) {
             stats.rays += 1;
             let Some(hit) = scene.intersect(&ray) else {
-                if emission_counts && let Some(env) = scene.environment {
+                if emission_counts && let Some(env) = &scene.environment {
                     // The camera ray itself shows the backdrop (as in `dept`'s view).
                     l += beta
                         * if bounce == 0 {
-                            env.background
+                            env.seen_by_camera(ray.d)
                         } else {
                             env.radiance(ray.d)
                         };

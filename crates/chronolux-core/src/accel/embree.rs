@@ -50,28 +50,8 @@ const BUILD_QUALITY_MEDIUM: i32 = 1;
 const BUILD_QUALITY_HIGH: i32 = 2;
 const INVALID_ID: u32 = u32::MAX;
 
-/// `RTCRayHit` (Embree 4, one instance level). The hit part carries one spare word for
-/// builds with instance arrays (`instPrimID`), which Embree writes after `instID`.
-#[repr(C, align(16))]
-struct RayHit {
-    org: [f32; 3],
-    tnear: f32,
-    dir: [f32; 3],
-    time: f32,
-    tfar: f32,
-    mask: u32,
-    id: u32,
-    flags: u32,
-    ng: [f32; 3],
-    u: f32,
-    v: f32,
-    prim_id: u32,
-    geom_id: u32,
-    inst_id: [u32; 1],
-    inst_prim_id: [u32; 1],
-}
-
-/// `RTCRay`.
+/// `RTCRay`: a ray of the open interval `0 < t < tmax` (the own BVH's; Embree's interval
+/// is closed, so its ends are moved one float inwards).
 #[repr(C, align(16))]
 struct RtcRay {
     org: [f32; 3],
@@ -84,32 +64,58 @@ struct RtcRay {
     flags: u32,
 }
 
+impl RtcRay {
+    fn new(org: [f32; 3], dir: [f32; 3], tmax: f32) -> RtcRay {
+        RtcRay {
+            org,
+            tnear: f32::MIN_POSITIVE,
+            dir,
+            time: 0.0,
+            tfar: tmax.next_down(),
+            mask: u32::MAX,
+            id: 0,
+            flags: 0,
+        }
+    }
+}
+
+/// `RTCHit` (Embree 4, one instance level), with one spare word for builds with instance
+/// arrays (`instPrimID`), which Embree writes after `instID`.
+#[repr(C, align(16))]
+struct RtcHit {
+    ng: [f32; 3],
+    u: f32,
+    v: f32,
+    prim_id: u32,
+    geom_id: u32,
+    inst_id: [u32; 1],
+    inst_prim_id: [u32; 1],
+}
+
+impl RtcHit {
+    const NONE: RtcHit = RtcHit {
+        ng: [0.0; 3],
+        u: 0.0,
+        v: 0.0,
+        prim_id: INVALID_ID,
+        geom_id: INVALID_ID,
+        inst_id: [INVALID_ID],
+        inst_prim_id: [INVALID_ID],
+    };
+}
+
+/// `RTCRayHit`.
+#[repr(C)]
+struct RayHit {
+    ray: RtcRay,
+    hit: RtcHit,
+}
+
 /// Rays per packet query (`rtcIntersect16`: one AVX-512 register per field; on AVX2
 /// machines Embree runs it as two 8-wide halves).
 pub const PACKET: usize = 16;
 
-/// `RTCRayHit16`: structure of arrays, one lane per ray. The hit part carries the spare
-/// `instPrimID` lanes as `RayHit` does.
-#[repr(C, align(64))]
-struct RayHit16 {
-    org: [[f32; PACKET]; 3],
-    tnear: [f32; PACKET],
-    dir: [[f32; PACKET]; 3],
-    time: [f32; PACKET],
-    tfar: [f32; PACKET],
-    mask: [u32; PACKET],
-    id: [u32; PACKET],
-    flags: [u32; PACKET],
-    ng: [[f32; PACKET]; 3],
-    u: [f32; PACKET],
-    v: [f32; PACKET],
-    prim_id: [u32; PACKET],
-    geom_id: [u32; PACKET],
-    inst_id: [u32; PACKET],
-    inst_prim_id: [u32; PACKET],
-}
-
-/// `RTCRay16`.
+/// `RTCRay16`: structure of arrays, one lane per ray, as [`RtcRay`].
 #[repr(C, align(64))]
 struct Ray16 {
     org: [[f32; PACKET]; 3],
@@ -121,6 +127,57 @@ struct Ray16 {
     id: [u32; PACKET],
     flags: [u32; PACKET],
 }
+
+impl Ray16 {
+    /// The first `rays.len()` (≤ [`PACKET`]) lanes from `rays`, the rest unused.
+    fn new(rays: &[PacketRay]) -> Ray16 {
+        let mut p = Ray16 {
+            org: [[0.0; PACKET]; 3],
+            tnear: [f32::MIN_POSITIVE; PACKET],
+            dir: [[0.0; PACKET]; 3],
+            time: [0.0; PACKET],
+            tfar: [0.0; PACKET],
+            mask: [u32::MAX; PACKET],
+            id: [0; PACKET],
+            flags: [0; PACKET],
+        };
+        for (k, (o, d, tmax)) in rays.iter().take(PACKET).enumerate() {
+            for a in 0..3 {
+                p.org[a][k] = o[a];
+                p.dir[a][k] = d[a];
+            }
+            p.tfar[k] = tmax.next_down();
+        }
+        p
+    }
+}
+
+/// `RTCHit16`, with the spare `instPrimID` lanes as [`RtcHit`].
+#[repr(C, align(64))]
+struct Hit16 {
+    ng: [[f32; PACKET]; 3],
+    u: [f32; PACKET],
+    v: [f32; PACKET],
+    prim_id: [u32; PACKET],
+    geom_id: [u32; PACKET],
+    inst_id: [u32; PACKET],
+    inst_prim_id: [u32; PACKET],
+}
+
+/// `RTCRayHit16`.
+#[repr(C)]
+struct RayHit16 {
+    ray: Ray16,
+    hit: Hit16,
+}
+
+// The C layouts the structs mirror (Embree 4's rtcore_ray.h): the hit starts right after
+// the ray, 48 bytes for one ray and 12 lanes × 64 bytes for a packet.
+const _: () = {
+    assert!(std::mem::size_of::<RtcRay>() == 48);
+    assert!(std::mem::offset_of!(RayHit, hit) == 48);
+    assert!(std::mem::offset_of!(RayHit16, hit) == 12 * 4 * PACKET);
+};
 
 /// `valid` mask of a packet: −1 for the first `n` lanes.
 #[repr(C, align(64))]
@@ -464,38 +521,25 @@ impl Scene {
         }
     }
 
-    /// Closest hit with `0 < t < tmax` (the own BVH's open interval: Embree's is closed,
-    /// so its ends are moved one float inwards).
+    /// Closest hit with `0 < t < tmax`.
     #[inline]
     pub fn intersect(&self, o: [f32; 3], d: [f32; 3], tmax: f32) -> Option<RawHit> {
         // A `Scene` exists only where the API loaded.
         let api = api()?;
         let mut rh = RayHit {
-            org: o,
-            tnear: f32::MIN_POSITIVE,
-            dir: d,
-            time: 0.0,
-            tfar: tmax.next_down(),
-            mask: u32::MAX,
-            id: 0,
-            flags: 0,
-            ng: [0.0; 3],
-            u: 0.0,
-            v: 0.0,
-            prim_id: INVALID_ID,
-            geom_id: INVALID_ID,
-            inst_id: [INVALID_ID],
-            inst_prim_id: [INVALID_ID],
+            ray: RtcRay::new(o, d, tmax),
+            hit: RtcHit::NONE,
         };
         // SAFETY: a committed scene and a properly aligned, initialised RTCRayHit.
         unsafe { (api.intersect1)(self.raw, &mut rh, std::ptr::null_mut()) };
-        (rh.geom_id != INVALID_ID).then_some(RawHit {
-            t: rh.tfar,
-            prim: rh.prim_id,
-            u: rh.u,
-            v: rh.v,
-            instance: rh.inst_id[0],
-            geom: rh.geom_id,
+        let h = &rh.hit;
+        (h.geom_id != INVALID_ID).then_some(RawHit {
+            t: rh.ray.tfar,
+            prim: h.prim_id,
+            u: h.u,
+            v: h.v,
+            instance: h.inst_id[0],
+            geom: h.geom_id,
         })
     }
 
@@ -505,16 +549,7 @@ impl Scene {
         let Some(api) = api() else {
             return false;
         };
-        let mut r = RtcRay {
-            org: o,
-            tnear: f32::MIN_POSITIVE,
-            dir: d,
-            time: 0.0,
-            tfar: tmax.next_down(),
-            mask: u32::MAX,
-            id: 0,
-            flags: 0,
-        };
+        let mut r = RtcRay::new(o, d, tmax);
         // SAFETY: a committed scene and a properly aligned, initialised RTCRay.
         unsafe { (api.occluded1)(self.raw, &mut r, std::ptr::null_mut()) };
         r.tfar == f32::NEG_INFINITY
@@ -528,40 +563,29 @@ impl Scene {
             return;
         };
         let mut p = RayHit16 {
-            org: [[0.0; PACKET]; 3],
-            tnear: [f32::MIN_POSITIVE; PACKET],
-            dir: [[0.0; PACKET]; 3],
-            time: [0.0; PACKET],
-            tfar: [0.0; PACKET],
-            mask: [u32::MAX; PACKET],
-            id: [0; PACKET],
-            flags: [0; PACKET],
-            ng: [[0.0; PACKET]; 3],
-            u: [0.0; PACKET],
-            v: [0.0; PACKET],
-            prim_id: [INVALID_ID; PACKET],
-            geom_id: [INVALID_ID; PACKET],
-            inst_id: [INVALID_ID; PACKET],
-            inst_prim_id: [INVALID_ID; PACKET],
+            ray: Ray16::new(&rays[..n]),
+            hit: Hit16 {
+                ng: [[0.0; PACKET]; 3],
+                u: [0.0; PACKET],
+                v: [0.0; PACKET],
+                prim_id: [INVALID_ID; PACKET],
+                geom_id: [INVALID_ID; PACKET],
+                inst_id: [INVALID_ID; PACKET],
+                inst_prim_id: [INVALID_ID; PACKET],
+            },
         };
-        for (k, (o, d, tmax)) in rays[..n].iter().enumerate() {
-            for a in 0..3 {
-                p.org[a][k] = o[a];
-                p.dir[a][k] = d[a];
-            }
-            p.tfar[k] = tmax.next_down();
-        }
         let valid = Valid16::first(n);
         // SAFETY: a committed scene, a 64-byte-aligned RTCRayHit16 and valid mask.
         unsafe { (api.intersect16)(valid.0.as_ptr(), self.raw, &mut p, std::ptr::null_mut()) };
+        let h = &p.hit;
         for (k, o) in out[..n].iter_mut().enumerate() {
-            *o = (p.geom_id[k] != INVALID_ID).then_some(RawHit {
-                t: p.tfar[k],
-                prim: p.prim_id[k],
-                u: p.u[k],
-                v: p.v[k],
-                instance: p.inst_id[k],
-                geom: p.geom_id[k],
+            *o = (h.geom_id[k] != INVALID_ID).then_some(RawHit {
+                t: p.ray.tfar[k],
+                prim: h.prim_id[k],
+                u: h.u[k],
+                v: h.v[k],
+                instance: h.inst_id[k],
+                geom: h.geom_id[k],
             });
         }
     }
@@ -573,23 +597,7 @@ impl Scene {
             out[..n].fill(false);
             return;
         };
-        let mut p = Ray16 {
-            org: [[0.0; PACKET]; 3],
-            tnear: [f32::MIN_POSITIVE; PACKET],
-            dir: [[0.0; PACKET]; 3],
-            time: [0.0; PACKET],
-            tfar: [0.0; PACKET],
-            mask: [u32::MAX; PACKET],
-            id: [0; PACKET],
-            flags: [0; PACKET],
-        };
-        for (k, (o, d, tmax)) in rays[..n].iter().enumerate() {
-            for a in 0..3 {
-                p.org[a][k] = o[a];
-                p.dir[a][k] = d[a];
-            }
-            p.tfar[k] = tmax.next_down();
-        }
+        let mut p = Ray16::new(&rays[..n]);
         let valid = Valid16::first(n);
         // SAFETY: a committed scene, a 64-byte-aligned RTCRay16 and valid mask.
         unsafe { (api.occluded16)(valid.0.as_ptr(), self.raw, &mut p, std::ptr::null_mut()) };

@@ -40,6 +40,16 @@ fn oray(o: Vec3A, d: Vec3A, tmax: f32) -> ORay {
     ORay::new(o, d + Vec3A::ZERO, 0.0, tmax)
 }
 
+/// Up to [`embree::PACKET`] rays as one packet query's input.
+#[inline]
+fn packet_of(rays: &[Ray]) -> [embree::PacketRay; embree::PACKET] {
+    let mut packet = [([0.0f32; 3], [0.0f32; 3], 0.0f32); embree::PACKET];
+    for (p, r) in packet.iter_mut().zip(rays) {
+        *p = (r.o.to_array(), r.d.to_array(), r.tmax);
+    }
+    packet
+}
+
 /// Most triangles in a frame traced as one flat Embree scene ([`Accel::new`]).
 pub const FLAT_MAX: usize = 16_384;
 
@@ -405,26 +415,28 @@ impl Accel {
         {
             return None;
         }
-        let world: Vec<(u32, Vec<[[f32; 3]; 3]>)> = instances
+        // Untransformed instances are passed as they are, moved ones transformed.
+        let world: Vec<_> = instances
             .iter()
             .enumerate()
             .filter(|(_, i)| i.blas.triangle_count() > 0)
             .map(|(k, inst)| {
                 let m = inst.world_from_object;
                 let tris = if inst.identity {
-                    inst.blas.soup.clone()
+                    std::borrow::Cow::Borrowed(inst.blas.soup.as_slice())
                 } else {
-                    inst.blas
-                        .soup
-                        .iter()
-                        .map(|t| t.map(|p| m.transform_point3(Vec3::from_array(p)).to_array()))
-                        .collect()
+                    std::borrow::Cow::Owned(
+                        inst.blas
+                            .soup
+                            .iter()
+                            .map(|t| t.map(|p| m.transform_point3(Vec3::from_array(p)).to_array()))
+                            .collect(),
+                    )
                 };
                 (k as u32, tris)
             })
             .collect();
-        let soups: Vec<(u32, &[[[f32; 3]; 3]])> =
-            world.iter().map(|(k, t)| (*k, t.as_slice())).collect();
+        let soups: Vec<(u32, &[[[f32; 3]; 3]])> = world.iter().map(|(k, t)| (*k, &**t)).collect();
         embree::Scene::flat(&soups)
     }
 
@@ -458,10 +470,16 @@ impl Accel {
         embree::Scene::instances(&items)
     }
 
-    /// The hit of Embree's top level as ours.
+    /// The hit of the Embree scene of [`Accel::embree_whole`] as ours: the flat scene
+    /// names the instance by geometry, the instance level by instance, and a lone
+    /// untransformed BLAS is instance 0.
     #[inline]
     fn embree_hit(&self, h: embree::RawHit) -> Hit {
-        let instance = if self.embree_flat { h.geom } else { h.instance };
+        let instance = match (&self.embree_tlas, self.embree_flat) {
+            (Some(_), true) => h.geom,
+            (Some(_), false) => h.instance,
+            (None, _) => 0,
+        };
         let inst = &self.instances[instance as usize];
         Hit {
             t: h.t,
@@ -548,33 +566,16 @@ impl Accel {
             }
             return;
         };
-        let top = self.embree_tlas.is_some();
         let mut raw: [Option<embree::RawHit>; embree::PACKET] = Default::default();
         for (rs, os) in rays
             .chunks(embree::PACKET)
             .zip(out.chunks_mut(embree::PACKET))
         {
-            let mut packet = [([0.0f32; 3], [0.0f32; 3], 0.0f32); embree::PACKET];
-            for (p, r) in packet.iter_mut().zip(rs) {
-                *p = (r.o.to_array(), r.d.to_array(), r.tmax);
-            }
+            let packet = packet_of(rs);
             let packet = &packet[..rs.len()];
             scene.intersect_packet(packet, &mut raw);
             for (o, h) in os.iter_mut().zip(raw.iter_mut()) {
-                *o = h.take().map(|h| {
-                    if top {
-                        self.embree_hit(h)
-                    } else {
-                        Hit {
-                            t: h.t,
-                            instance: 0,
-                            tri: self.instances[0]
-                                .global(self.instances[0].blas.refs[h.prim as usize]),
-                            b1: h.u,
-                            b2: h.v,
-                        }
-                    }
-                });
+                *o = h.take().map(|h| self.embree_hit(h));
             }
         }
     }
@@ -597,10 +598,7 @@ impl Accel {
             .chunks(embree::PACKET)
             .zip(out.chunks_mut(embree::PACKET))
         {
-            let mut packet = [([0.0f32; 3], [0.0f32; 3], 0.0f32); embree::PACKET];
-            for (p, r) in packet.iter_mut().zip(rs) {
-                *p = (r.o.to_array(), r.d.to_array(), r.tmax);
-            }
+            let packet = packet_of(rs);
             let packet = &packet[..rs.len()];
             scene.occluded_packet(packet, os);
         }

@@ -6,19 +6,15 @@
 //! point reflects exactly the radiance 1 it receives, and every pixel (sphere or map seen
 //! directly) is 1.
 
-use crate::source;
+use crate::matrix::{H, W, settings};
 use chronolux_core::color::Rgb;
 use chronolux_core::light::{EnvMap, Environment};
 use chronolux_core::scene::desc::{Material, SceneDesc, Trs};
 use chronolux_core::scene::testing::{single_mesh_scene, uv_sphere};
 use chronolux_render::framework::integrator::RenderedFrame;
-use chronolux_render::framework::run::{self, MemorySink};
-use chronolux_render::registry::{self, BuildContext, TECHNIQUES, Technique};
+use chronolux_render::registry::{self, TECHNIQUES, Technique};
 use glam::Vec3;
 use serde_json::Value;
-
-const W: u32 = 24;
-const H: u32 = 24;
 
 /// A constant map of radiance 1, given as texels 0.25 at strength 4 and rotated, so that
 /// strength and rotation are on the path.
@@ -45,25 +41,11 @@ fn furnace_scene(env: Environment) -> SceneDesc {
     d
 }
 
-fn settings(t: &dyn Technique, units: u64) -> Value {
-    let e = t.capabilities().effort;
-    registry::resolve(
-        t,
-        None,
-        &[(e.key.to_string(), Value::from(units * e.per_unit))],
-    )
-    .unwrap_or_else(|err| panic!("{}: {err}", t.name()))
-}
-
+/// The last of `frames` rendered by `t` (the registry test matrix's run, 24×24).
 fn render(t: &dyn Technique, settings: &Value, desc: SceneDesc, frames: &[u32]) -> RenderedFrame {
-    let mut renderer = t
-        .build(settings, &BuildContext::default())
-        .unwrap_or_else(|e| panic!("{}: {e}", t.name()));
-    let mut src = source(desc, W, H, 24.0, frames.to_vec());
-    let mut sink = MemorySink::new();
-    run::run(&mut *renderer, &mut src, frames, &mut [&mut sink], None)
-        .unwrap_or_else(|e| panic!("{}: {e}", t.name()));
-    sink.frames.pop().expect("a frame").1
+    crate::matrix::render(t, settings, desc, frames)
+        .pop()
+        .expect("a frame")
 }
 
 /// Bound on |image mean − 1| per channel for the biased techniques (photon density

@@ -18,12 +18,12 @@ use chronolux_render::framework::run::{self, MemorySink};
 use chronolux_render::registry::{self, BuildContext, TECHNIQUES, Technique};
 use serde_json::Value;
 
-const W: u32 = 24;
-const H: u32 = 24;
+pub(crate) const W: u32 = 24;
+pub(crate) const H: u32 = 24;
 
 /// Settings of `t`: its defaults with its effort knob at `units` effort units (samples per
 /// pixel, thousands of photons).
-fn settings(t: &dyn Technique, units: u64) -> Value {
+pub(crate) fn settings(t: &dyn Technique, units: u64) -> Value {
     let e = t.capabilities().effort;
     registry::resolve(
         t,
@@ -35,7 +35,7 @@ fn settings(t: &dyn Technique, units: u64) -> Value {
 
 /// Frames `frames` of `desc` at 24 fps rendered by `t` with `settings` through the run
 /// loop; the images in frame order.
-fn render(
+pub(crate) fn render(
     t: &dyn Technique,
     settings: &Value,
     desc: SceneDesc,

@@ -229,16 +229,41 @@ impl Lobes {
         f
     }
 
+    /// What depends on `wo` alone (local, upper side), computed once per query and shared
+    /// by the value and the pdf: the specular layer's albedo at `wo` (the diffuse base's
+    /// `1 − E(μo)`) and the lobe selection probabilities. Only evaluated where it is used
+    /// (the layer albedo only with a diffuse base), so the numbers are those each part
+    /// computed on its own before.
+    #[inline]
+    fn wo_terms(&self, wo: Vec3, eta: f32) -> WoTerms {
+        let layer_wo = self.layer_wo(wo);
+        WoTerms {
+            layer_wo,
+            p: self.probabilities(wo, eta, layer_wo),
+        }
+    }
+
+    /// [`WoTerms::layer_wo`]: the layer albedo at `wo` where a diffuse base uses it, else 0.
+    #[inline]
+    fn layer_wo(&self, wo: Vec3) -> f32 {
+        if self.has_diffuse() {
+            self.layer_albedo(wo.z)
+        } else {
+            0.0
+        }
+    }
+
     /// Lobe selection probabilities (diffuse, reflection, transmission) at `wo` (local,
-    /// upper side).
-    fn probabilities(&self, wo: Vec3, eta: f32) -> [f32; 3] {
+    /// upper side); `layer_wo` = [`Lobes::layer_albedo`] at `wo.z` (used with a diffuse
+    /// base only).
+    fn probabilities(&self, wo: Vec3, eta: f32, layer_wo: f32) -> [f32; 3] {
         let avg = |c: Rgb| (c.x + c.y + c.z) / 3.0;
         let c = wo.z;
         let delta = self.is_delta();
         let mut w = [0.0f32; 3];
         if self.has_diffuse() {
             // Floor: a non-delta lobe that f() can return must keep a non-zero probability.
-            w[0] = (avg(self.diffuse) * (1.0 - self.layer_albedo(c))).max(1e-4);
+            w[0] = (avg(self.diffuse) * (1.0 - layer_wo)).max(1e-4);
         }
         if self.has_reflection() {
             w[1] = avg(self.fresnel_reflect(c, eta));
@@ -263,15 +288,15 @@ impl Lobes {
         w.map(|x| x / sum)
     }
 
-    /// Value of the non-delta lobes (local frame, `wo.z > 0`), without cosine.
-    fn f_local(&self, wo: Vec3, wi: Vec3, eta: f32, radiance: bool) -> Rgb {
+    /// Value of the non-delta lobes (local frame, `wo.z > 0`), without cosine; `t` =
+    /// [`Lobes::wo_terms`] at `wo`.
+    fn f_local(&self, t: &WoTerms, wo: Vec3, wi: Vec3, eta: f32, radiance: bool) -> Rgb {
         let mut f = Rgb::ZERO;
         if wi.z > 0.0 {
             if self.has_diffuse() {
                 let denom = 1.0 - self.layer_albedo_avg();
                 if denom > 1e-6 {
-                    let k =
-                        (1.0 - self.layer_albedo(wo.z)) * (1.0 - self.layer_albedo(wi.z)) / denom;
+                    let k = (1.0 - t.layer_wo) * (1.0 - self.layer_albedo(wi.z)) / denom;
                     f += self.diffuse * (FRAC_1_PI * k.max(0.0));
                 }
             }
@@ -323,9 +348,10 @@ impl Lobes {
         Some((m, dwm.abs() / denom))
     }
 
-    /// Combined solid-angle pdf of the non-delta lobes (local frame, `wo.z > 0`).
-    fn pdf_local(&self, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
-        let p = self.probabilities(wo, eta);
+    /// Combined solid-angle pdf of the non-delta lobes (local frame, `wo.z > 0`); `t` =
+    /// [`Lobes::wo_terms`] at `wo`.
+    fn pdf_local(&self, t: &WoTerms, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
+        let p = t.p;
         let delta = self.is_delta();
         let mut pdf = 0.0;
         if wi.z > 0.0 {
@@ -346,6 +372,12 @@ impl Lobes {
         }
         pdf
     }
+}
+
+/// [`Lobes::wo_terms`]: the parts of a query that depend on `wo` only.
+struct WoTerms {
+    layer_wo: f32,
+    p: [f32; 3],
 }
 
 /// `wo`, `wi` in the local frame mirrored so that `wo.z > 0`, and the relative index seen
@@ -432,9 +464,32 @@ impl Bsdf {
         }
         let l = self.local(lo);
         let li_l = if l.flip { mirror(li) } else { li };
+        // The value needs the layer albedo at `wo`, not the selection probabilities.
+        let t = WoTerms {
+            layer_wo: self.lobes.layer_wo(l.wo),
+            p: [0.0; 3],
+        };
+        self.f_mode(&t, &l, li_l, wo, wi, lo, li, mode)
+    }
+
+    /// [`Bsdf::f`] from the local directions: the lobes' value, the medium's attenuation
+    /// and, for importance, the adjoint correction.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
+    fn f_mode(
+        &self,
+        t: &WoTerms,
+        l: &Local,
+        li_l: Vec3,
+        wo: Vec3,
+        wi: Vec3,
+        lo: Vec3,
+        li: Vec3,
+        mode: TransportMode,
+    ) -> Rgb {
         let mut f = self
             .lobes
-            .f_local(l.wo, li_l, l.eta, mode == TransportMode::Radiance);
+            .f_local(t, l.wo, li_l, l.eta, mode == TransportMode::Radiance);
         if let Some(t) = self.lobes.attenuation {
             f *= t;
         }
@@ -452,7 +507,26 @@ impl Bsdf {
         }
         let l = self.local(lo);
         let li_l = if l.flip { mirror(li) } else { li };
-        self.lobes.pdf_local(l.wo, li_l, l.eta)
+        let t = self.lobes.wo_terms(l.wo, l.eta);
+        self.lobes.pdf_local(&t, l.wo, li_l, l.eta)
+    }
+
+    /// [`Bsdf::f`] and [`Bsdf::pdf`] of one pair in one pass (the frame change and what
+    /// depends on `wo` computed once), equal to the two calls' values bit for bit. For
+    /// next-event estimation, which needs both for its MIS weight.
+    pub fn f_pdf(&self, wo: Vec3, wi: Vec3, mode: TransportMode) -> (Rgb, f32) {
+        let (lo, li) = (self.frame.to_local(wo), self.frame.to_local(wi));
+        if lo.z == 0.0 || li.z == 0.0 {
+            return (Rgb::ZERO, 0.0);
+        }
+        let l = self.local(lo);
+        let li_l = if l.flip { mirror(li) } else { li };
+        let t = self.lobes.wo_terms(l.wo, l.eta);
+        let pdf = self.lobes.pdf_local(&t, l.wo, li_l, l.eta);
+        if !self.sides_agree(wo, wi, lo, li) {
+            return (Rgb::ZERO, pdf);
+        }
+        (self.f_mode(&t, &l, li_l, wo, wi, lo, li, mode), pdf)
     }
 
     /// Samples `wi` given `wo`; `u_lobe` chooses the lobe, `u` the direction.
@@ -469,7 +543,8 @@ impl Bsdf {
         }
         let l = self.local(lo);
         let lobes = &self.lobes;
-        let p = lobes.probabilities(l.wo, l.eta);
+        let t = lobes.wo_terms(l.wo, l.eta);
+        let p = t.p;
         let lobe = if u_lobe < p[0] {
             0
         } else if u_lobe < p[0] + p[1] || p[2] == 0.0 {
@@ -547,11 +622,11 @@ impl Bsdf {
                 eta,
             });
         }
-        let pdf = lobes.pdf_local(l.wo, li_l, l.eta);
+        let pdf = lobes.pdf_local(&t, l.wo, li_l, l.eta);
         if pdf.is_nan() || pdf <= 0.0 {
             return None;
         }
-        let mut f = lobes.f_local(l.wo, li_l, l.eta, radiance);
+        let mut f = lobes.f_local(&t, l.wo, li_l, l.eta, radiance);
         if let Some(t) = lobes.attenuation {
             f *= t;
         }

@@ -110,7 +110,14 @@ pub fn next_event(
     if !(pmf > 0.0 && ls.pdf > 0.0) {
         return Rgb::ZERO;
     }
-    let f = bsdf.f(wo, ls.wi, TransportMode::Radiance) * ls.wi.dot(bsdf.frame.n).abs();
+    // The BSDF's pdf only where the MIS weight needs it, then from the same pass as f.
+    let mis = !(ls.is_delta || weight == NeeWeight::LightOnly);
+    let (f, bsdf_pdf) = if mis {
+        bsdf.f_pdf(wo, ls.wi, TransportMode::Radiance)
+    } else {
+        (bsdf.f(wo, ls.wi, TransportMode::Radiance), 0.0)
+    };
+    let f = f * ls.wi.dot(bsdf.frame.n).abs();
     if f == Rgb::ZERO {
         return Rgb::ZERO;
     }
@@ -119,10 +126,10 @@ pub fn next_event(
         return Rgb::ZERO;
     }
     let le = light_radiance(scene, light, ls.li, ls.bary);
-    let w = if ls.is_delta || weight == NeeWeight::LightOnly {
-        1.0
+    let w = if mis {
+        power_heuristic(1.0, pmf * ls.pdf, 1.0, bsdf_pdf)
     } else {
-        power_heuristic(1.0, pmf * ls.pdf, 1.0, bsdf.pdf(wo, ls.wi))
+        1.0
     };
     beta * f * le * (w / (pmf * ls.pdf))
 }

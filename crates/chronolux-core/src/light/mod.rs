@@ -17,7 +17,7 @@ pub mod emit;
 pub mod envmap;
 pub use envmap::EnvMap;
 pub mod spherical;
-use spherical::{sample_spherical_triangle, triangle_solid_angle, use_solid_angle_sampling};
+use spherical::{sample_spherical_triangle, sampled_solid_angle};
 
 /// One light of a frame (world space).
 #[derive(Clone, Debug)]
@@ -308,8 +308,9 @@ impl Light {
                 two_sided,
                 ..
             } => {
-                let omega = triangle_solid_angle(p, *p0, *e1, *e2);
-                let spherical = use_solid_angle_sampling(omega);
+                let sampled = sampled_solid_angle(p, *p0, *e1, *e2, *n, *area);
+                let spherical = sampled.is_some();
+                let omega = sampled.unwrap_or(0.0);
                 if spherical && !*two_sided && (p - *p0).dot(*n) <= 0.0 {
                     return None;
                 }
@@ -376,8 +377,7 @@ impl Light {
                 two_sided,
                 ..
             } => {
-                let omega = triangle_solid_angle(p, *p0, *e1, *e2);
-                if use_solid_angle_sampling(omega) {
+                if let Some(omega) = sampled_solid_angle(p, *p0, *e1, *e2, *n, *area) {
                     return if !*two_sided && (p - *p0).dot(*n) <= 0.0 {
                         0.0
                     } else {

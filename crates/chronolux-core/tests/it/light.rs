@@ -6,7 +6,9 @@
 use crate::chi2::{CapGrid, pooled_p_value};
 use chronolux_core::accel::TriRef;
 use chronolux_core::color::{Rgb, luminance};
-use chronolux_core::light::spherical::use_solid_angle_sampling;
+use chronolux_core::light::spherical::{
+    sampled_solid_angle, triangle_solid_angle, use_solid_angle_sampling,
+};
 use chronolux_core::light::{Environment, Light, spot_falloff};
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::sampling::rng::Pcg32;
@@ -608,4 +610,40 @@ fn far_triangle_estimator_has_nearly_zero_variance() {
     // Second-order terms (~(4D/d)² ≈ 1%) are covered by a 1.5× margin.
     let bound = 1.5 * 4.0 * diam / d;
     assert!(hi / lo - 1.0 <= bound, "spread {} > {bound}", hi / lo - 1.0);
+}
+
+/// `sampled_solid_angle` skips the exact solid angle only where its bound proves the
+/// triangle is sampled by area: over random triangles and reference points at every
+/// distance (near the threshold 0.1 sr, far away, next to a vertex, in the plane), its
+/// decision and solid angle are exactly those of `triangle_solid_angle` +
+/// `use_solid_angle_sampling` (bit for bit, so images do not change).
+#[test]
+fn bounded_solid_angle_decision_equals_exact() {
+    let r_kind = |x: f32| (x * 3.0) as u32;
+    let mut r = Pcg32::new(91, 3);
+    let mut u = || r.next_f32();
+    let n = 200_000;
+    for _ in 0..n {
+        let v = |u: &mut dyn FnMut() -> f32| Vec3::new(u() - 0.5, u() - 0.5, u() - 0.5);
+        let (p0, p1, p2) = (v(&mut u), v(&mut u), v(&mut u));
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let dir = v(&mut u).normalize_or_zero();
+        let p = match r_kind(u()) {
+            // Distances from 0.01 to 100 (log-uniform) around the triangle.
+            0 => p0 + dir * 10f32.powf(4.0 * u() - 2.0),
+            // Close to a vertex (1e-6 to 0.1), where the distance bound cancels.
+            1 => [p0, p1, p2][(u() * 2.999) as usize] + dir * 10f32.powf(5.0 * u() - 6.0),
+            // In the triangle's plane, inside and around it.
+            _ => p0 + e1 * (3.0 * u() - 1.0) + e2 * (3.0 * u() - 1.0),
+        };
+        let exact = triangle_solid_angle(p, p0, e1, e2);
+        let want = use_solid_angle_sampling(exact).then_some(exact);
+        let cr = e1.cross(e2);
+        let got = sampled_solid_angle(p, p0, e1, e2, cr.normalize(), 0.5 * cr.length());
+        assert_eq!(
+            got.map(f32::to_bits),
+            want.map(f32::to_bits),
+            "p {p} triangle {p0} {p1} {p2}: Ω {exact}"
+        );
+    }
 }

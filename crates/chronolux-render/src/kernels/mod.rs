@@ -21,6 +21,7 @@ pub mod bdpt;
 pub mod blur;
 pub mod direct;
 pub mod elements;
+pub mod eye;
 pub mod gather;
 pub mod path;
 pub mod photon;

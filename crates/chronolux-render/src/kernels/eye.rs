@@ -166,3 +166,71 @@ pub fn walk<R: EyeReader, U: Uniforms>(
         path.ray = spawn_ray(si.p, si.ng, bs.wi);
     }
 }
+
+/// BSDFs that the views' glossy rules tell apart, by name (for their tests).
+#[cfg(test)]
+pub(crate) fn glossy_cases() -> Vec<(&'static str, Bsdf)> {
+    use chronolux_core::bsdf::Lobes;
+    use chronolux_core::math::Frame;
+    // (name, metallic, perceptual roughness, specular factor, transmission)
+    let cases = [
+        ("lambert", 0.0, 1.0, 0.0, 0.0),
+        ("smooth plastic", 0.0, 0.0, 1.0, 0.0),
+        ("glossy plastic", 0.0, 0.2, 1.0, 0.0),
+        ("rough plastic", 0.0, 0.8, 1.0, 0.0),
+        ("smooth metal", 1.0, 0.0, 1.0, 0.0),
+        ("glossy metal", 1.0, 0.2, 1.0, 0.0),
+        ("rough metal", 1.0, 0.8, 1.0, 0.0),
+        ("smooth glass", 0.0, 0.0, 1.0, 1.0),
+        ("glossy glass", 0.0, 0.2, 1.0, 1.0),
+    ];
+    cases
+        .into_iter()
+        .map(|(name, metallic, roughness, specular, transmission)| {
+            let lobes = Lobes::gltf(
+                Rgb::splat(0.8),
+                metallic,
+                roughness,
+                1.5,
+                specular,
+                Rgb::ONE,
+                transmission,
+            );
+            let bsdf = Bsdf {
+                frame: Frame::from_normal(Vec3::Z),
+                ng: Vec3::Z,
+                lobes,
+            };
+            (name, bsdf)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::glossy_cases;
+
+    /// The one glossy test: a rough specular, metal or transmission lobe, never a delta
+    /// and never a BSDF without such a lobe; the bound is exclusive.
+    #[test]
+    fn is_glossy_is_a_rough_non_delta_specular_lobe() {
+        for (name, b) in glossy_cases() {
+            let rough = [
+                "glossy plastic",
+                "rough plastic",
+                "glossy metal",
+                "rough metal",
+                "glossy glass",
+            ]
+            .contains(&name);
+            assert_eq!(b.is_glossy(f32::INFINITY), rough, "{name}");
+            if rough {
+                assert!(
+                    !b.is_glossy(b.lobes.alpha),
+                    "{name}: the bound is exclusive"
+                );
+                assert!(b.is_glossy(b.lobes.alpha * 1.01), "{name}");
+            }
+        }
+    }
+}

@@ -227,3 +227,19 @@ impl<S: IndirectSource> RadianceEstimator for EyeView<'_, S> {
         self.walk(scene, camera_ray, sampler, stats, None)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::follows_glossy;
+    use crate::kernels::eye::glossy_cases;
+
+    /// The photon-map view follows a glossy lobe below `glossy_alpha` only where it
+    /// carries the surface's light: a glossy plastic's coating is read with its base.
+    #[test]
+    fn follows_glossy_metal_and_glass_not_plastic() {
+        for (name, b) in glossy_cases() {
+            let follows = ["glossy metal", "glossy glass"].contains(&name);
+            assert_eq!(follows_glossy(&b, 0.1), follows, "{name}");
+        }
+    }
+}

@@ -200,3 +200,29 @@ fn split_here(b: &Bsdf, alpha_glossy: f32) -> bool {
             && l.diffuse != Rgb::ZERO
             && (l.specular_weight > 0.0 || l.metal_weight > 0.0 || l.transmission_weight > 0.0))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::split_here;
+    use crate::kernels::eye::glossy_cases;
+
+    /// SPT splits glossy lobes below its bound and, as well, a delta coating over a
+    /// diffuse base (not a bare mirror or smooth glass: no base to split off).
+    #[test]
+    fn split_here_glossy_lobes_and_delta_coatings() {
+        for (name, b) in glossy_cases() {
+            let split = [
+                "smooth plastic",
+                "glossy plastic",
+                "glossy metal",
+                "glossy glass",
+            ]
+            .contains(&name);
+            assert_eq!(split_here(&b, 0.5 * 0.5), split, "{name}");
+        }
+        // No bound, no split: the delta coating's α is not below a zero bound either.
+        for (name, b) in glossy_cases() {
+            assert!(!split_here(&b, 0.0), "{name}");
+        }
+    }
+}

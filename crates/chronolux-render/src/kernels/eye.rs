@@ -11,7 +11,10 @@
 //! emission, direct light and the stored solution, and either stops or hands back the
 //! [`BsdfSample`] to continue with. Where a view follows a glossy lobe instead of reading
 //! its solution, it asks [`Bsdf::is_glossy`], the one glossy test, with its own roughness
-//! bound and glossy budget.
+//! bound and glossy budget. Two views add a rule of their own on top, each a choice of
+//! what to trace rather than of what is glossy: the photon-map view follows a glossy lobe
+//! only where it carries the surface's light (not a plastic's coating), and the SPT view
+//! also splits a delta coating off a diffuse base.
 
 use chronolux_core::accel::Hit;
 use chronolux_core::bsdf::{Bsdf, BsdfSample};

@@ -359,6 +359,80 @@ fn validation_errors(root: &json::Root, channel_index: &[Vec<usize>]) -> Vec<(St
     errors
 }
 
+/// How the elements of an accessor lie in its bytes, and how a component reads.
+struct AccessorLayout {
+    ct: json::accessor::ComponentType,
+    normalized: bool,
+    /// Components per element, as rows × columns (a matrix is stored column by column).
+    n: usize,
+    rows: usize,
+    cols: usize,
+    /// Bytes of a component; of a column (a matrix's padded to 4 bytes); of an element.
+    cs: usize,
+    col_stride: usize,
+    elem_size: usize,
+}
+
+impl AccessorLayout {
+    fn new(ct: json::accessor::ComponentType, ty: json::accessor::Type, normalized: bool) -> Self {
+        use json::accessor::Type;
+        let cs = ct.size();
+        let n = ty.multiplicity();
+        let (rows, cols) = match ty {
+            Type::Mat2 => (2, 2),
+            Type::Mat3 => (3, 3),
+            Type::Mat4 => (4, 4),
+            _ => (n, 1),
+        };
+        let col_stride = if cols > 1 {
+            (rows * cs).div_ceil(4) * 4
+        } else {
+            rows * cs
+        };
+        AccessorLayout {
+            ct,
+            normalized,
+            n,
+            rows,
+            cols,
+            cs,
+            col_stride,
+            elem_size: col_stride * cols,
+        }
+    }
+
+    /// The component in `b` (its `cs` bytes), normalised integers converted to [0, 1] /
+    /// [-1, 1].
+    fn component(&self, b: &[u8]) -> f64 {
+        use json::accessor::ComponentType as Ct;
+        let normalized = self.normalized;
+        match self.ct {
+            Ct::I8 => {
+                let v = b[0] as i8 as f64;
+                if normalized { (v / 127.0).max(-1.0) } else { v }
+            }
+            Ct::U8 => {
+                let v = b[0] as f64;
+                if normalized { v / 255.0 } else { v }
+            }
+            Ct::I16 => {
+                let v = i16::from_le_bytes([b[0], b[1]]) as f64;
+                if normalized {
+                    (v / 32767.0).max(-1.0)
+                } else {
+                    v
+                }
+            }
+            Ct::U16 => {
+                let v = u16::from_le_bytes([b[0], b[1]]) as f64;
+                if normalized { v / 65535.0 } else { v }
+            }
+            Ct::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Ct::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        }
+    }
+}
+
 struct Loader<'a> {
     file: String,
     doc: &'a gltf::Document,
@@ -566,7 +640,7 @@ impl Loader<'_> {
     /// Reads accessor `idx` as flat `f64` components (normalised integers converted to
     /// [0, 1] / [-1, 1]). Returns (values, components per element).
     fn read_accessor(&self, idx: usize, path: &str) -> Result<(Vec<f64>, usize), LoadError> {
-        use json::accessor::{ComponentType as Ct, GenericComponentType, Type};
+        use json::accessor::GenericComponentType;
         let apath = format!("{path} (accessors[{idx}])");
         let acc = self
             .json()
@@ -581,84 +655,12 @@ impl Loader<'_> {
             Checked::Valid(t) => t,
             Checked::Invalid => return Err(self.invalid(&apath, "invalid type")),
         };
-        let cs = ct.size();
-        let n = ty.multiplicity();
-        let (rows, cols) = match ty {
-            Type::Mat2 => (2, 2),
-            Type::Mat3 => (3, 3),
-            Type::Mat4 => (4, 4),
-            _ => (n, 1),
-        };
-        let col_stride = if cols > 1 {
-            (rows * cs).div_ceil(4) * 4
-        } else {
-            rows * cs
-        };
-        let elem_size = col_stride * cols;
+        let layout = AccessorLayout::new(ct, ty, acc.normalized);
+        let (n, elem_size) = (layout.n, layout.elem_size);
         let count = usize::try_from(acc.count.0).unwrap_or(usize::MAX);
         if count.saturating_mul(n) > (1 << 27) {
             return Err(self.invalid(&apath, format!("count {count} is unreasonably large")));
         }
-        let normalized = acc.normalized;
-        let read = |b: &[u8]| -> f64 {
-            match ct {
-                Ct::I8 => {
-                    let v = b[0] as i8 as f64;
-                    if normalized { (v / 127.0).max(-1.0) } else { v }
-                }
-                Ct::U8 => {
-                    let v = b[0] as f64;
-                    if normalized { v / 255.0 } else { v }
-                }
-                Ct::I16 => {
-                    let v = i16::from_le_bytes([b[0], b[1]]) as f64;
-                    if normalized {
-                        (v / 32767.0).max(-1.0)
-                    } else {
-                        v
-                    }
-                }
-                Ct::U16 => {
-                    let v = u16::from_le_bytes([b[0], b[1]]) as f64;
-                    if normalized { v / 65535.0 } else { v }
-                }
-                Ct::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-                Ct::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
-            }
-        };
-        // Reads `count` elements starting at `off` with `stride` from `data`, bounds-checked.
-        let read_elems = |data: &[u8],
-                          off: usize,
-                          stride: usize,
-                          count: usize,
-                          what: &str|
-         -> Result<Vec<f64>, LoadError> {
-            if count == 0 {
-                return Ok(Vec::new());
-            }
-            let last = stride
-                .checked_mul(count - 1)
-                .and_then(|x| x.checked_add(off))
-                .and_then(|x| x.checked_add(elem_size))
-                .unwrap_or(usize::MAX);
-            if last > data.len() {
-                return Err(self.invalid(
-                    &apath,
-                    format!("{count} elements of {elem_size} bytes (stride {stride}, offset {off}) need {last} bytes but the {what} has {}", data.len()),
-                ));
-            }
-            let mut out = Vec::with_capacity(count * n);
-            for e in 0..count {
-                let base = off + e * stride;
-                for c in 0..cols {
-                    for r in 0..rows {
-                        let o = base + c * col_stride + r * cs;
-                        out.push(read(&data[o..o + cs]));
-                    }
-                }
-            }
-            Ok(out)
-        };
         let mut values = match acc.buffer_view {
             Some(v) => {
                 let (data, stride) = self.view(v.value(), &apath)?;
@@ -670,59 +672,130 @@ impl Loader<'_> {
                     ));
                 }
                 let off = usize::try_from(acc.byte_offset.map_or(0, |o| o.0)).unwrap_or(usize::MAX);
-                read_elems(data, off, stride, count, "buffer view")?
+                self.read_elements(&layout, &apath, data, off, stride, count, "buffer view")?
             }
             None => vec![0.0; count * n],
         };
         if let Some(sparse) = &acc.sparse {
-            let scount = usize::try_from(sparse.count.0).unwrap_or(usize::MAX);
-            if scount > count {
-                return Err(self.invalid(
-                    format!("{apath}.sparse"),
-                    "more sparse values than elements",
-                ));
-            }
-            let ict = match sparse.indices.component_type {
-                Checked::Valid(json::accessor::IndexComponentType(c)) => c,
-                Checked::Invalid => {
-                    return Err(
-                        self.invalid(format!("{apath}.sparse.indices"), "invalid componentType")
-                    );
-                }
-            };
-            let isz = ict.size();
-            let (idata, _) = self.view(sparse.indices.buffer_view.value(), &apath)?;
-            let ioff = usize::try_from(sparse.indices.byte_offset.0).unwrap_or(usize::MAX);
-            let iend = isz
-                .checked_mul(scount)
-                .and_then(|x| x.checked_add(ioff))
-                .unwrap_or(usize::MAX);
-            if iend > idata.len() {
-                return Err(self.invalid(
-                    format!("{apath}.sparse.indices"),
-                    "indices lie outside their buffer view",
-                ));
-            }
-            let (vdata, _) = self.view(sparse.values.buffer_view.value(), &apath)?;
-            let voff = usize::try_from(sparse.values.byte_offset.0).unwrap_or(usize::MAX);
-            let svals = read_elems(vdata, voff, elem_size, scount, "sparse values buffer view")?;
-            for k in 0..scount {
-                let b = &idata[ioff + k * isz..ioff + (k + 1) * isz];
-                let i = match isz {
-                    1 => b[0] as usize,
-                    2 => u16::from_le_bytes([b[0], b[1]]) as usize,
-                    _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
-                };
-                if i >= count {
-                    return Err(self.invalid(
-                        format!("{apath}.sparse.indices"),
-                        format!("index {i} out of range (count {count})"),
-                    ));
-                }
-                values[i * n..(i + 1) * n].copy_from_slice(&svals[k * n..(k + 1) * n]);
-            }
+            self.apply_sparse(sparse, &layout, &apath, count, &mut values)?;
         }
         Ok((values, n))
+    }
+
+    /// Reads `count` elements of `layout` starting at `off` with `stride` from `data` (the
+    /// `what` of accessor `apath`), bounds-checked.
+    fn read_elements(
+        &self,
+        layout: &AccessorLayout,
+        apath: &str,
+        data: &[u8],
+        off: usize,
+        stride: usize,
+        count: usize,
+        what: &str,
+    ) -> Result<Vec<f64>, LoadError> {
+        let &AccessorLayout {
+            n,
+            rows,
+            cols,
+            cs,
+            col_stride,
+            elem_size,
+            ..
+        } = layout;
+        if count == 0 {
+            return Ok(Vec::new());
+        }
+        let last = stride
+            .checked_mul(count - 1)
+            .and_then(|x| x.checked_add(off))
+            .and_then(|x| x.checked_add(elem_size))
+            .unwrap_or(usize::MAX);
+        if last > data.len() {
+            return Err(self.invalid(
+                apath,
+                format!("{count} elements of {elem_size} bytes (stride {stride}, offset {off}) need {last} bytes but the {what} has {}", data.len()),
+            ));
+        }
+        let mut out = Vec::with_capacity(count * n);
+        for e in 0..count {
+            let base = off + e * stride;
+            for c in 0..cols {
+                for r in 0..rows {
+                    let o = base + c * col_stride + r * cs;
+                    out.push(layout.component(&data[o..o + cs]));
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Writes the sparse substitutes of accessor `apath` (of `count` elements) into its
+    /// `values`.
+    fn apply_sparse(
+        &self,
+        sparse: &json::accessor::sparse::Sparse,
+        layout: &AccessorLayout,
+        apath: &str,
+        count: usize,
+        values: &mut [f64],
+    ) -> Result<(), LoadError> {
+        let n = layout.n;
+        let scount = usize::try_from(sparse.count.0).unwrap_or(usize::MAX);
+        if scount > count {
+            return Err(self.invalid(
+                format!("{apath}.sparse"),
+                "more sparse values than elements",
+            ));
+        }
+        let ict = match sparse.indices.component_type {
+            Checked::Valid(json::accessor::IndexComponentType(c)) => c,
+            Checked::Invalid => {
+                return Err(
+                    self.invalid(format!("{apath}.sparse.indices"), "invalid componentType")
+                );
+            }
+        };
+        let isz = ict.size();
+        let (idata, _) = self.view(sparse.indices.buffer_view.value(), apath)?;
+        let ioff = usize::try_from(sparse.indices.byte_offset.0).unwrap_or(usize::MAX);
+        let iend = isz
+            .checked_mul(scount)
+            .and_then(|x| x.checked_add(ioff))
+            .unwrap_or(usize::MAX);
+        if iend > idata.len() {
+            return Err(self.invalid(
+                format!("{apath}.sparse.indices"),
+                "indices lie outside their buffer view",
+            ));
+        }
+        let (vdata, _) = self.view(sparse.values.buffer_view.value(), apath)?;
+        let voff = usize::try_from(sparse.values.byte_offset.0).unwrap_or(usize::MAX);
+        let svals = self.read_elements(
+            layout,
+            apath,
+            vdata,
+            voff,
+            layout.elem_size,
+            scount,
+            "sparse values buffer view",
+        )?;
+        for k in 0..scount {
+            let b = &idata[ioff + k * isz..ioff + (k + 1) * isz];
+            let i = match isz {
+                1 => b[0] as usize,
+                2 => u16::from_le_bytes([b[0], b[1]]) as usize,
+                _ => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize,
+            };
+            if i >= count {
+                return Err(self.invalid(
+                    format!("{apath}.sparse.indices"),
+                    format!("index {i} out of range (count {count})"),
+                ));
+            }
+            values[i * n..(i + 1) * n].copy_from_slice(&svals[k * n..(k + 1) * n]);
+        }
+        Ok(())
     }
 
     fn read_vecs<const N: usize>(
@@ -1155,6 +1228,41 @@ impl Loader<'_> {
                 .push(format!("{path}: primitive without POSITION skipped"));
             return Ok(None);
         };
+        let positions = self.read_positions(&pos_acc, path)?;
+        let nv = positions.len();
+        let mut prim = Primitive {
+            positions,
+            material: p.material().index().map(|i| MaterialId(i as u32)),
+            ..Default::default()
+        };
+        self.read_vertex_attributes(p, path, &mut prim)?;
+        if prim.joints.is_some() != prim.joint_weights.is_some() {
+            self.warnings.push(format!(
+                "{path}: JOINTS_0 without WEIGHTS_0 (or the reverse): skinning ignored"
+            ));
+            prim.joints = None;
+            prim.joint_weights = None;
+        }
+        prim.morph_targets = self.read_morph_targets(p, path, nv)?;
+        let tris = self.read_triangles(p, path, nv)?;
+        let before = tris.len();
+        let pos = &prim.positions;
+        prim.indices = tris
+            .into_iter()
+            .filter(|&[a, b, c]| {
+                if a == b || b == c || a == c {
+                    return false;
+                }
+                let (pa, pb, pc) = (pos[a as usize], pos[b as usize], pos[c as usize]);
+                (pb - pa).cross(pc - pa).length_squared() > 0.0
+            })
+            .collect();
+        let skipped = before - prim.indices.len();
+        Ok(Some((prim, skipped)))
+    }
+
+    /// A primitive's POSITION, checked to be finite and within what f32 geometry holds.
+    fn read_positions(&self, pos_acc: &gltf::Accessor, path: &str) -> Result<Vec<Vec3>, LoadError> {
         let ppath = format!("{path}.attributes.POSITION");
         let positions: Vec<Vec3> = self
             .read_vecs::<3>(pos_acc.index(), &ppath)?
@@ -1174,12 +1282,19 @@ impl Loader<'_> {
                 format!("vertex {i} lies beyond ±{max:e}, outside what f32 geometry can hold"),
             ));
         }
-        let nv = positions.len();
-        let mut prim = Primitive {
-            positions,
-            material: p.material().index().map(|i| MaterialId(i as u32)),
-            ..Default::default()
-        };
+        Ok(positions)
+    }
+
+    /// The primitive's other vertex attributes (normals, tangents, two UV sets, joints and
+    /// weights), each checked for length against `prim.positions`.
+    fn read_vertex_attributes(
+        &self,
+        p: &gltf::Primitive,
+        path: &str,
+        prim: &mut Primitive,
+    ) -> Result<(), LoadError> {
+        use gltf::mesh::Semantic;
+        let nv = prim.positions.len();
         for (sem, acc) in p.attributes() {
             let apath = format!("{path}.attributes.{}", sem.to_string());
             match sem {
@@ -1219,13 +1334,17 @@ impl Loader<'_> {
                 _ => {}
             }
         }
-        if prim.joints.is_some() != prim.joint_weights.is_some() {
-            self.warnings.push(format!(
-                "{path}: JOINTS_0 without WEIGHTS_0 (or the reverse): skinning ignored"
-            ));
-            prim.joints = None;
-            prim.joint_weights = None;
-        }
+        Ok(())
+    }
+
+    /// The primitive's morph targets over its `nv` vertices.
+    fn read_morph_targets(
+        &self,
+        p: &gltf::Primitive,
+        path: &str,
+        nv: usize,
+    ) -> Result<Vec<MorphTarget>, LoadError> {
+        let mut targets = Vec::new();
         for (ti, t) in p.morph_targets().enumerate() {
             let tpath = format!("{path}.targets[{ti}]");
             // One reader for the three displacement attributes, each checked for length
@@ -1245,8 +1364,20 @@ impl Loader<'_> {
                 normals: read_target(t.normals(), "NORMAL")?,
                 tangents: read_target(t.tangents(), "TANGENT")?,
             };
-            prim.morph_targets.push(mt);
+            targets.push(mt);
         }
+        Ok(targets)
+    }
+
+    /// The primitive's triangles (of a list, strip or fan; indices checked against its
+    /// `nv` vertices; without indices, the vertices in order).
+    fn read_triangles(
+        &mut self,
+        p: &gltf::Primitive,
+        path: &str,
+        nv: usize,
+    ) -> Result<Vec<[u32; 3]>, LoadError> {
+        use gltf::mesh::Mode;
         let idx: Vec<u32> = match p.indices() {
             Some(a) => {
                 let ipath = format!("{path}.indices");
@@ -1261,7 +1392,7 @@ impl Loader<'_> {
             }
             None => (0..nv as u32).collect(),
         };
-        let tris: Vec<[u32; 3]> = match mode {
+        Ok(match p.mode() {
             Mode::TriangleStrip => (0..idx.len().saturating_sub(2))
                 .map(|i| {
                     if i % 2 == 0 {
@@ -1283,21 +1414,7 @@ impl Loader<'_> {
                 }
                 idx.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()
             }
-        };
-        let before = tris.len();
-        let pos = &prim.positions;
-        prim.indices = tris
-            .into_iter()
-            .filter(|&[a, b, c]| {
-                if a == b || b == c || a == c {
-                    return false;
-                }
-                let (pa, pb, pc) = (pos[a as usize], pos[b as usize], pos[c as usize]);
-                (pb - pa).cross(pc - pa).length_squared() > 0.0
-            })
-            .collect();
-        let skipped = before - prim.indices.len();
-        Ok(Some((prim, skipped)))
+        })
     }
 
     // -----------------------------------------------------------------------------------

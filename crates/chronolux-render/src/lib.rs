@@ -13,7 +13,11 @@
 //!   technique — [`kernels::path`] (the path tracer's
 //!   [`li`](framework::integrator::RadianceEstimator::li)), [`kernels::bdpt`],
 //!   [`kernels::photon`], [`kernels::direct`], [`kernels::elements`] (density estimation
-//!   on mesh elements), [`kernels::gather`] (photon maps, irradiance cache, final gather).
+//!   on mesh elements), [`kernels::gather`] (photon maps, irradiance cache, final gather),
+//!   and [`kernels::eye`], the one eye walk through specular chains that the views of the
+//!   element, SPT and photon-map techniques read their solutions along (each view says
+//!   what a vertex adds and where the path ends; one glossy test,
+//!   `chronolux_core::bsdf::Bsdf::is_glossy`).
 //! - [`techniques`]: one module per technique, holding its registry entry and its
 //!   sequence renderer (what it reuses across frames); the kernels do the light transport.
 //!

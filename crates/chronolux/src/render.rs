@@ -2,7 +2,7 @@
 
 use crate::args::{RenderArgs, SceneArgs};
 use crate::config::{
-    CommonFlags, ConfigFile, FlagSetting, RunConfig, parse_sets, technique_settings,
+    CommonFlags, ConfigFile, FlagSetting, PartialRun, RunConfig, parse_sets, technique_settings,
 };
 use crate::info;
 use crate::scene_input;
@@ -14,6 +14,7 @@ use chronolux_io::image::Image;
 use chronolux_io::output::{FrameRecord, FrameSink, Manifest};
 use chronolux_render::framework::aov::PassSet;
 use chronolux_render::framework::run;
+use chronolux_render::framework::technique::Technique;
 use chronolux_render::registry::{self, BuildContext};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::sync::Arc;
@@ -144,25 +145,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
     // Everything that can be checked without the scene is checked before loading it.
     let file = args.config.as_deref().map(ConfigFile::read).transpose()?;
     let prev = file.as_ref().map(ConfigFile::run).unwrap_or_default();
-    let method = args
-        .method
-        .clone()
-        .or_else(|| prev.method.clone())
-        .unwrap_or_else(|| registry::DEFAULT_METHOD.into());
-    let tech = registry::find(&method).map_err(anyhow::Error::msg)?;
-    // A config file's technique settings apply to its own method only.
-    let base = match &file {
-        Some(ConfigFile::Settings(v)) => Some(v.clone()),
-        Some(f) if f.method() == Some(method.as_str()) => prev.technique.clone(),
-        Some(f) => {
-            log::warn!(
-                "--config names --method {}, overridden by --method {method}: its technique settings are not used",
-                f.method().unwrap_or("?")
-            );
-            None
-        }
-        None => None,
-    };
+    let (method, tech, base) = method_of(args, file.as_ref(), &prev)?;
     if let Some(spp) = args.spp
         && (spp == 0 || spp > MAX_SPP)
     {
@@ -175,74 +158,33 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         bail!("--exposure must be a finite number of stops");
     }
     let view = args.view.or(prev.view).unwrap_or_default();
-    let environment = match &args.environment {
-        Some(file) => {
-            let strength = args.environment_strength.unwrap_or(1.0);
-            if !(strength.is_finite() && strength >= 0.0) {
-                bail!("--environment-strength must be a finite number ≥ 0, not {strength}");
-            }
-            let rotation_deg = args.environment_rotation.unwrap_or(0.0);
-            if !rotation_deg.is_finite() {
-                bail!("--environment-rotation must be a finite number of degrees");
-            }
-            if !file.is_file() {
-                bail!(
-                    "--environment {}: no such file (an .exr or .hdr equirectangular map)",
-                    file.display()
-                );
-            }
-            let file = std::fs::canonicalize(file).unwrap_or_else(|_| file.clone());
-            Some(crate::config::EnvironmentConfig {
-                file: file.display().to_string(),
-                strength,
-                rotation_deg,
-                hidden: args.environment_hidden,
-            })
-        }
-        None => prev.environment.clone(),
-    };
+    let environment = environment_of(args, &prev)?;
     let shutter = args.shutter.or(prev.shutter).unwrap_or(0.0);
     chronolux_render::framework::technique::check_shutter(shutter).map_err(anyhow::Error::msg)?;
     let mut flags = Vec::new();
-    let mut flag = |flag: &'static str, key: &'static str, value: Option<serde_json::Value>| {
-        if let Some(value) = value {
-            flags.push(FlagSetting { flag, key, value });
-        }
+    if let Some(window) = args.window {
+        flags.push(FlagSetting {
+            flag: "--window",
+            key: "window",
+            value: window.into(),
+        });
+    }
+    let sources = SettingSources {
+        tech,
+        base,
+        common: CommonFlags {
+            spp: args.spp,
+            seed: args.seed,
+            max_depth: args.max_depth,
+        },
+        flags,
+        sets: parse_sets(&args.set)?,
     };
-    let common = CommonFlags {
-        spp: args.spp,
-        seed: args.seed,
-        max_depth: args.max_depth,
-    };
-    flag("--window", "window", args.window.map(Into::into));
-    let sets = parse_sets(&args.set)?;
     let passes = match &args.passes {
         Some(p) => PassSet::parse(p).map_err(anyhow::Error::msg)?,
         None => prev.passes.unwrap_or_default(),
     };
-    // Denoised unless told not to: asked (--denoise, or a --config that denoised) it must
-    // be done; by default it is done where the denoiser can be had.
-    let asked = if args.no_denoise {
-        Some(false)
-    } else if args.denoise || args.denoise_quality.is_some() {
-        Some(true)
-    } else {
-        prev.denoise
-    };
-    let (denoise, denoise_skipped) = match asked {
-        Some(true) => match crate::denoise::unavailable() {
-            Some(why) if args.denoise || args.denoise_quality.is_some() => {
-                bail!("--denoise: {why} (--no-denoise renders without)")
-            }
-            Some(why) => bail!("--config asks for denoising: {why} (--no-denoise renders without)"),
-            None => (true, None),
-        },
-        Some(false) => (false, None),
-        None => match crate::denoise::unavailable() {
-            Some(why) => (false, Some(why)),
-            None => (true, None),
-        },
-    };
+    let (denoise, denoise_skipped) = denoising(args, &prev)?;
     let requested_frames = match args.frames.as_deref() {
         Some(f) => Some(parse_frames(f)?),
         None => prev.frames.clone(),
@@ -251,16 +193,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         Some(r) => Some(parse_resolution(r)?),
         None => prev.resolution.map(|[w, h]| (w, h)),
     };
-    let scene_args = SceneArgs {
-        scene: args
-            .scene
-            .scene
-            .clone()
-            .or_else(|| prev.scene.clone().map(Into::into)),
-        animation: args.scene.animation.clone().or(prev.animation.clone()),
-        camera: args.scene.camera.clone().or(prev.camera.clone()),
-        stage: args.scene.stage.clone().or(prev.stage.clone()),
-    };
+    let scene_args = scene_args_of(args, &prev);
     // The quality level's effort settings under the config file's and the flags'. A
     // config file's own level is not asked again: its technique settings carry it. The
     // level's entry is the one measured nearest the image's pixel count: known now when
@@ -273,41 +206,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         }
         None => None,
     };
-    let settle = |pixels: Option<u64>| -> Result<Settled> {
-        let level = registry::quality_settings(tech, args.quality.as_deref(), denoise, pixels)
-            .map_err(anyhow::Error::msg)?;
-        let base = match (&level, &base) {
-            (Some((q, _)), Some(b)) => {
-                let mut q = q.clone();
-                registry::merge(&mut q, b);
-                Some(q)
-            }
-            (Some((q, _)), None) => Some(q.clone()),
-            (None, b) => b.clone(),
-        };
-        let denoise_quality = args
-            .denoise_quality
-            .or(prev.denoise_quality)
-            .or(level.as_ref().and_then(|(_, l)| {
-                <crate::denoise::DenoiseQuality as clap::ValueEnum>::from_str(l.denoiser, false)
-                    .ok()
-            }))
-            .unwrap_or_default();
-        let settings = technique_settings(
-            tech,
-            base.as_ref(),
-            common,
-            &flags,
-            args.photons.as_deref(),
-            &sets,
-        )?;
-        Ok(Settled {
-            level: level.map(|(_, l)| l),
-            denoise_quality,
-            settings,
-        })
-    };
-    let mut settled = settle(known_pixels)?;
+    let mut settled = sources.settle(args, &prev, denoise, known_pixels)?;
     // Built once here so that a bad combination fails before the scene is loaded.
     let built = tech
         .build(&settled.settings, &BuildContext { shutter })
@@ -330,35 +229,14 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
             e.file
         );
     }
-    let last = last_frame(&input.desc, input.animation, fps);
-    let frames = match requested_frames {
-        Some(f) => f,
-        None => (0..=last.unwrap_or(0)).collect(),
-    };
-    if let Some(last) = last {
-        let max = *frames.iter().max().unwrap();
-        if max > last {
-            bail!(
-                "--frames goes to frame {max}, but the animation ends at frame {last} ({:.3} s at {} fps)",
-                last as f32 / fps,
-                fps
-            );
-        }
-    }
-    if input.animation.is_none() && frames.len() > 1 {
-        log::warn!(
-            "{} has no animation: the {} frames will be identical",
-            input.source,
-            frames.len()
-        );
-    }
+    let frames = frames_of(requested_frames, &input, fps)?;
     let (w, h) = match requested_resolution {
         Some(r) => r,
         None if scene_args.scene.is_none() => DEMO_RESOLUTION,
         None => default_resolution(&input.desc, &input.camera),
     };
     if known_pixels.is_none() {
-        settled = settle(Some(u64::from(w) * u64::from(h)))?;
+        settled = sources.settle(args, &prev, denoise, Some(u64::from(w) * u64::from(h)))?;
     }
     let Settled {
         level,
@@ -384,7 +262,7 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
         },
         resolution: [w, h],
         fps,
-        frames: frames.clone(),
+        frames,
         shutter,
         exposure,
         passes,
@@ -401,15 +279,205 @@ pub fn resolve(args: &RenderArgs) -> Result<(RunConfig, scene_input::SceneInput,
     Ok((config, input, denoise_skipped))
 }
 
+/// The method (`--method`, else the config file's, else the default), its technique, and
+/// the config file's technique settings when they are that method's.
+fn method_of(
+    args: &RenderArgs,
+    file: Option<&ConfigFile>,
+    prev: &PartialRun,
+) -> Result<(String, &'static dyn Technique, Option<serde_json::Value>)> {
+    let method = args
+        .method
+        .clone()
+        .or_else(|| prev.method.clone())
+        .unwrap_or_else(|| registry::DEFAULT_METHOD.into());
+    let tech = registry::find(&method).map_err(anyhow::Error::msg)?;
+    // A config file's technique settings apply to its own method only.
+    let base = match file {
+        Some(ConfigFile::Settings(v)) => Some(v.clone()),
+        Some(f) if f.method() == Some(method.as_str()) => prev.technique.clone(),
+        Some(f) => {
+            log::warn!(
+                "--config names --method {}, overridden by --method {method}: its technique settings are not used",
+                f.method().unwrap_or("?")
+            );
+            None
+        }
+        None => None,
+    };
+    Ok((method, tech, base))
+}
+
+/// The environment map (`--environment` and its strength and rotation, checked; else the
+/// config file's).
+fn environment_of(
+    args: &RenderArgs,
+    prev: &PartialRun,
+) -> Result<Option<crate::config::EnvironmentConfig>> {
+    let Some(file) = &args.environment else {
+        return Ok(prev.environment.clone());
+    };
+    let strength = args.environment_strength.unwrap_or(1.0);
+    if !(strength.is_finite() && strength >= 0.0) {
+        bail!("--environment-strength must be a finite number ≥ 0, not {strength}");
+    }
+    let rotation_deg = args.environment_rotation.unwrap_or(0.0);
+    if !rotation_deg.is_finite() {
+        bail!("--environment-rotation must be a finite number of degrees");
+    }
+    if !file.is_file() {
+        bail!(
+            "--environment {}: no such file (an .exr or .hdr equirectangular map)",
+            file.display()
+        );
+    }
+    let file = std::fs::canonicalize(file).unwrap_or_else(|_| file.clone());
+    Ok(Some(crate::config::EnvironmentConfig {
+        file: file.display().to_string(),
+        strength,
+        rotation_deg,
+        hidden: args.environment_hidden,
+    }))
+}
+
+/// Whether the frames are denoised, and why not when by default they cannot be.
+/// Denoised unless told not to: asked (--denoise, or a --config that denoised) it must
+/// be done; by default it is done where the denoiser can be had.
+fn denoising(args: &RenderArgs, prev: &PartialRun) -> Result<(bool, Option<String>)> {
+    let asked = if args.no_denoise {
+        Some(false)
+    } else if args.denoise || args.denoise_quality.is_some() {
+        Some(true)
+    } else {
+        prev.denoise
+    };
+    Ok(match asked {
+        Some(true) => match crate::denoise::unavailable() {
+            Some(why) if args.denoise || args.denoise_quality.is_some() => {
+                bail!("--denoise: {why} (--no-denoise renders without)")
+            }
+            Some(why) => bail!("--config asks for denoising: {why} (--no-denoise renders without)"),
+            None => (true, None),
+        },
+        Some(false) => (false, None),
+        None => match crate::denoise::unavailable() {
+            Some(why) => (false, Some(why)),
+            None => (true, None),
+        },
+    })
+}
+
+/// The scene, clip, camera and stage: the flags', else the config file's.
+fn scene_args_of(args: &RenderArgs, prev: &PartialRun) -> SceneArgs {
+    SceneArgs {
+        scene: args
+            .scene
+            .scene
+            .clone()
+            .or_else(|| prev.scene.clone().map(Into::into)),
+        animation: args.scene.animation.clone().or(prev.animation.clone()),
+        camera: args.scene.camera.clone().or(prev.camera.clone()),
+        stage: args.scene.stage.clone().or(prev.stage.clone()),
+    }
+}
+
+/// The frames asked for (default: the whole clip), checked against the clip's end.
+fn frames_of(
+    requested: Option<Vec<u32>>,
+    input: &scene_input::SceneInput,
+    fps: f32,
+) -> Result<Vec<u32>> {
+    let last = last_frame(&input.desc, input.animation, fps);
+    let frames = match requested {
+        Some(f) => f,
+        None => (0..=last.unwrap_or(0)).collect(),
+    };
+    if let Some(last) = last {
+        let max = *frames.iter().max().unwrap();
+        if max > last {
+            bail!(
+                "--frames goes to frame {max}, but the animation ends at frame {last} ({:.3} s at {} fps)",
+                last as f32 / fps,
+                fps
+            );
+        }
+    }
+    if input.animation.is_none() && frames.len() > 1 {
+        log::warn!(
+            "{} has no animation: the {} frames will be identical",
+            input.source,
+            frames.len()
+        );
+    }
+    Ok(frames)
+}
+
 /// The built-in demo's resolution when none is given: meant to finish in a few minutes on
 /// a laptop.
 const DEMO_RESOLUTION: (u32, u32) = (256, 256);
+
+/// Where a technique's settings come from, below the quality level: the config file's
+/// settings of the method, `--spp`/`--seed`/`--max-depth`, the flags that name settings
+/// and the `--set`s.
+struct SettingSources {
+    tech: &'static dyn Technique,
+    base: Option<serde_json::Value>,
+    common: CommonFlags,
+    flags: Vec<FlagSetting>,
+    sets: Vec<(String, serde_json::Value)>,
+}
 
 /// What [`resolve`] takes from the quality level for one pixel count.
 struct Settled {
     level: Option<registry::QualityLevel>,
     denoise_quality: crate::denoise::DenoiseQuality,
     settings: serde_json::Value,
+}
+
+impl SettingSources {
+    /// The settings for an image of `pixels` pixels (`None`: not known yet): the quality
+    /// level's entry for it, then the sources above.
+    fn settle(
+        &self,
+        args: &RenderArgs,
+        prev: &PartialRun,
+        denoise: bool,
+        pixels: Option<u64>,
+    ) -> Result<Settled> {
+        let tech = self.tech;
+        let level = registry::quality_settings(tech, args.quality.as_deref(), denoise, pixels)
+            .map_err(anyhow::Error::msg)?;
+        let base = match (&level, &self.base) {
+            (Some((q, _)), Some(b)) => {
+                let mut q = q.clone();
+                registry::merge(&mut q, b);
+                Some(q)
+            }
+            (Some((q, _)), None) => Some(q.clone()),
+            (None, b) => b.clone(),
+        };
+        let denoise_quality = args
+            .denoise_quality
+            .or(prev.denoise_quality)
+            .or(level.as_ref().and_then(|(_, l)| {
+                <crate::denoise::DenoiseQuality as clap::ValueEnum>::from_str(l.denoiser, false)
+                    .ok()
+            }))
+            .unwrap_or_default();
+        let settings = technique_settings(
+            tech,
+            base.as_ref(),
+            self.common,
+            &self.flags,
+            args.photons.as_deref(),
+            &self.sets,
+        )?;
+        Ok(Settled {
+            level: level.map(|(_, l)| l),
+            denoise_quality,
+            settings,
+        })
+    }
 }
 
 /// Renders `config` (its scene already loaded as `input`) into `exec.output`.
@@ -456,6 +524,119 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
             *config.frames.first().context("no frame to render")?,
         )?,
     };
+    let manifest = manifest_of(config, exec, exposure, &summary, &sink)?;
+
+    let (options, asked) = run_options(config, tech, renderer.separates_light())?;
+    let progress = Progress::new(w, h, frames.len(), tech.capabilities().stateless);
+    progress.say(format!(
+        "rendering {} frame(s) of {} at {w}x{h}, method {}, {} thread(s) into {}",
+        frames.len(),
+        input.source,
+        renderer.name(),
+        rayon::current_num_threads(),
+        exec.output.display()
+    ));
+    // A frame is done when complete and recorded (`DiskSink::needs`'s own test). A
+    // stateful technique resumed renders its history again, as a farm segment does, so
+    // that a resumed render equals an uninterrupted one bit for bit.
+    let done = |f| sink.is_complete(f) && manifest.frame(f).is_some();
+    let warm_up_until = rebuild_history_until(
+        exec,
+        tech,
+        config,
+        &frames,
+        done,
+        &progress,
+        renderer.name(),
+    );
+    let mut disk = DiskSink {
+        sink: &sink,
+        manifest,
+        exposure,
+        view: config.view,
+        resume: exec.resume,
+        denoise: config.denoise.then_some(config.denoise_quality),
+        keep_passes: asked,
+        owned: exec.segment.as_ref().map(|s| s.owned.clone()),
+        warm_up_until,
+    };
+    let mut progress = progress;
+    let result = chronolux_render::framework::run::run_with(
+        renderer.as_mut(),
+        &mut source,
+        &frames,
+        &mut [&mut disk, &mut progress],
+        None,
+        options,
+    );
+    // The bars are cleared whatever happens, so that an error line is not drawn over.
+    progress.clear();
+    let summary = result.map_err(|e| anyhow::anyhow!("{e}"))?;
+    let written = written_frames(&frames, &summary, exec.segment.as_ref());
+    // A segment's frames are previewed when the farm's frames are assembled.
+    if !exec.no_preview && exec.segment.is_none() && written.len() > 1 {
+        match chronolux_io::output::write_preview(&exec.output, &written, fps) {
+            Ok(p) => progress.say(format!("preview: {}", p.display())),
+            Err(e) => eprintln!("warning: no preview written: {e}"),
+        }
+    }
+    progress.say(format!(
+        "done: {} frame(s) in {:.1} s, {:.2} Mrays/s → {}",
+        written.len(),
+        summary.wall_s,
+        progress.rays as f64 / summary.wall_s.max(1e-9) / 1e6,
+        exec.output.display()
+    ));
+    Ok(())
+}
+
+/// The frame before which a stateful technique renders complete frames again (to
+/// rebuild its history: a segment's warm-up, or a resumed run's), said when a resumed
+/// run does.
+fn rebuild_history_until(
+    exec: &Exec,
+    tech: &dyn Technique,
+    config: &RunConfig,
+    frames: &[u32],
+    done: impl Fn(u32) -> bool + Copy,
+    progress: &Progress,
+    name: &str,
+) -> Option<u32> {
+    let (owned, render_before) = match &exec.segment {
+        Some(s) => (&s.owned[..], s.render_before),
+        None => (
+            frames,
+            registry::frame_context(tech, &config.technique).render_before,
+        ),
+    };
+    let until = crate::segment::warm_up_until(owned, render_before, done, exec.resume);
+    if exec.resume
+        && exec.segment.is_none()
+        && let Some(u) = until
+    {
+        let again = frames.iter().filter(|&&f| f < u && done(f)).count();
+        if again > 0 {
+            progress.say(format!(
+                "resuming {}, which carries light from frame to frame: the {again} complete \
+                 frame(s) before frame {u} are rendered again (the same bits) to rebuild its history",
+                name
+            ));
+        }
+    }
+    until
+}
+
+/// `run.json` for a run of `config`: its settings, and what this machine adds to them
+/// (threads, the exposure chosen, where the denoiser and the ray queries came from, why
+/// a default run is not denoised); a segment's own part; and when resuming, the earlier
+/// run's frames once it is checked to be the same run.
+fn manifest_of(
+    config: &RunConfig,
+    exec: &Exec,
+    exposure: f32,
+    summary: &info::SceneSummary,
+    sink: &FrameSink,
+) -> Result<Manifest> {
     let mut settings_json = serde_json::to_value(config)?;
     settings_json["threads"] = rayon::current_num_threads().into();
     if config.exposure.is_none() {
@@ -482,7 +663,7 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
     let mut manifest = Manifest::new(
         std::env::args().collect(),
         settings_json,
-        serde_json::to_value(&summary)?,
+        serde_json::to_value(summary)?,
     );
     if let Some(seg) = &exec.segment {
         settings_json_segment(&mut manifest.settings, seg);
@@ -493,12 +674,20 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
         check_resumable(&earlier.settings, &manifest.settings, &exec.output)?;
         manifest.merge_earlier(&earlier);
     }
+    Ok(manifest)
+}
 
-    // Direct and indirect where the method separates them (`all`), an error where they
-    // were named and it does not.
+/// The passes the run computes and its seed; and the passes asked for (what is kept):
+/// direct and indirect where the method separates them (`all`), an error where they were
+/// named and it does not.
+fn run_options(
+    config: &RunConfig,
+    tech: &dyn Technique,
+    separates_light: bool,
+) -> Result<(run::RunOptions, PassSet)> {
     let asked = config
         .passes
-        .resolve(&config.method, renderer.separates_light())
+        .resolve(&config.method, separates_light)
         .map_err(anyhow::Error::msg)?;
     // A denoised frame needs its albedo and normal.
     let passes = if config.denoise {
@@ -513,91 +702,29 @@ pub fn execute(config: &RunConfig, input: scene_input::SceneInput, exec: &Exec) 
             .map_err(anyhow::Error::msg)?
             .seed,
     };
-    let progress = Progress::new(w, h, frames.len(), tech.capabilities().stateless);
-    progress.say(format!(
-        "rendering {} frame(s) of {} at {w}x{h}, method {}, {} thread(s) into {}",
-        frames.len(),
-        input.source,
-        renderer.name(),
-        rayon::current_num_threads(),
-        exec.output.display()
-    ));
-    // A frame is done when complete and recorded (`DiskSink::needs`'s own test). A
-    // stateful technique resumed renders its history again, as a farm segment does, so
-    // that a resumed render equals an uninterrupted one bit for bit.
-    let done = |f| sink.is_complete(f) && manifest.frame(f).is_some();
-    let (owned, render_before) = match &exec.segment {
-        Some(s) => (&s.owned[..], s.render_before),
-        None => (
-            &frames[..],
-            registry::frame_context(tech, &config.technique).render_before,
-        ),
-    };
-    let warm_up_until = crate::segment::warm_up_until(owned, render_before, done, exec.resume);
-    if exec.resume
-        && exec.segment.is_none()
-        && let Some(u) = warm_up_until
-    {
-        let again = frames.iter().filter(|&&f| f < u && done(f)).count();
-        if again > 0 {
-            progress.say(format!(
-                "resuming {}, which carries light from frame to frame: the {again} complete \
-                 frame(s) before frame {u} are rendered again (the same bits) to rebuild its history",
-                renderer.name()
-            ));
-        }
-    }
-    let mut disk = DiskSink {
-        sink: &sink,
-        manifest,
-        exposure,
-        view: config.view,
-        resume: exec.resume,
-        denoise: config.denoise.then_some(config.denoise_quality),
-        keep_passes: asked,
-        owned: exec.segment.as_ref().map(|s| s.owned.clone()),
-        warm_up_until,
-    };
-    let mut progress = progress;
-    let result = chronolux_render::framework::run::run_with(
-        renderer.as_mut(),
-        &mut source,
-        &frames,
-        &mut [&mut disk, &mut progress],
-        None,
-        options,
-    );
-    // The bars are cleared whatever happens, so that an error line is not drawn over.
-    progress.clear();
-    let summary = result.map_err(|e| anyhow::anyhow!("{e}"))?;
+    Ok((options, asked))
+}
+
+/// The frames of `frames` this run wrote (rendered or skipped as already done); of a
+/// segment's, only its own.
+fn written_frames(
+    frames: &[u32],
+    summary: &run::RunSummary,
+    segment: Option<&crate::segment::SegmentRun>,
+) -> Vec<u32> {
     let mut written: Vec<u32> = frames
         .iter()
         .copied()
         .filter(|f| summary.rendered.contains(f) || summary.skipped.contains(f))
         .collect();
     written.dedup();
-    let written: Vec<u32> = match &exec.segment {
+    match segment {
         Some(seg) => written
             .into_iter()
             .filter(|f| seg.owned.contains(f))
             .collect(),
         None => written,
-    };
-    // A segment's frames are previewed when the farm's frames are assembled.
-    if !exec.no_preview && exec.segment.is_none() && written.len() > 1 {
-        match chronolux_io::output::write_preview(&exec.output, &written, fps) {
-            Ok(p) => progress.say(format!("preview: {}", p.display())),
-            Err(e) => eprintln!("warning: no preview written: {e}"),
-        }
     }
-    progress.say(format!(
-        "done: {} frame(s) in {:.1} s, {:.2} Mrays/s → {}",
-        written.len(),
-        summary.wall_s,
-        progress.rays as f64 / summary.wall_s.max(1e-9) / 1e6,
-        exec.output.display()
-    ));
-    Ok(())
 }
 
 /// Writes finished frames (EXR + PNG) and keeps `run.json` current after each.

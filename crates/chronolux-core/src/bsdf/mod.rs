@@ -415,6 +415,19 @@ impl Bsdf {
             && lo.alpha < NEAR_SPECULAR_ALPHA
     }
 
+    /// True when the BSDF has a *glossy* specular lobe: the dielectric's specular layer,
+    /// metal or transmission with non-zero weight, rough enough not to be a delta
+    /// (α ≥ [`MIN_ALPHA`]) and with GGX α below `max_alpha` (`f32::INFINITY`: every rough
+    /// one). Light reflected by such a lobe is far from the uniform reading a diffuse
+    /// surface allows, so eye paths continue through it by sampling it. A property of the
+    /// lobes only, as [`Self::near_specular`].
+    pub fn is_glossy(&self, max_alpha: f32) -> bool {
+        let lo = &self.lobes;
+        (lo.specular_weight > 0.0 || lo.metal_weight > 0.0 || lo.transmission_weight > 0.0)
+            && lo.alpha >= MIN_ALPHA
+            && lo.alpha < max_alpha
+    }
+
     /// True if some lobe is not a delta distribution (light sampling can help).
     pub fn has_non_delta(&self) -> bool {
         let l = &self.lobes;

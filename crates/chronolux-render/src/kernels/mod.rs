@@ -8,6 +8,11 @@
 //! - [`path`]: the path tracer's radiance estimator (`path`, and the probe's).
 //! - [`bdpt`]: bidirectional subpaths, connections with MIS and caustic photons (`bdpt`,
 //!   `stbpt`).
+//! - [`eye`]: the eye walk through specular chains (delta and glossy bounces) that the
+//!   views reading a stored solution share: the element view (`dept*`,
+//!   `spacetime-dept`), the SPT view and the photon-map view (`pm-ic`, `ic-*`). The walk
+//!   owns the path; each view, an [`eye::EyeReader`], says what a vertex adds and where
+//!   the path ends, and asks the one glossy test, `Bsdf::is_glossy`.
 //! - [`elements`]: photon density estimation on mesh elements: the element map, photon
 //!   budget (stopping rule), reconstruction filters, eye pass over elements and eye-path
 //!   reuse records (`dept*`, `spacetime-dept`, `spt`).
@@ -21,6 +26,7 @@ pub mod bdpt;
 pub mod blur;
 pub mod direct;
 pub mod elements;
+pub mod eye;
 pub mod gather;
 pub mod path;
 pub mod photon;

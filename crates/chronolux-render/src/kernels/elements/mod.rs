@@ -7,7 +7,8 @@
 //! union of consecutive frames' photons is one contiguous Halton range) are traced by
 //! [`crate::kernels::photon`] and their flux summed on the elements of
 //! [`element_map::ElementMesh`]; [`reconstruct`] turns the sums into a smooth irradiance
-//! field; [`view`] renders eye rays with per-pixel direct light and element indirect light.
+//! field; [`view`] renders eye rays with per-pixel direct light and element indirect light
+//! (as a reader of the shared eye walk, [`crate::kernels::eye`]).
 
 pub mod budget;
 pub mod element_map;

@@ -17,8 +17,8 @@
 //!   i.e. incident radiance taken as uniform `E/π`; one BSDF sample estimates
 //!   `∫ f cos dω` (exactly ρ for a Lambertian surface, so no noise there).
 //!
-//! At a **glossy** surface (a rough specular, metal or transmission lobe with GGX
-//! α ≥ [`MIN_ALPHA`]) incident light is far from uniform — read as `E/π`, a rough-metal
+//! At a **glossy** surface ([`Bsdf::is_glossy`](chronolux_core::bsdf::Bsdf::is_glossy) with no roughness bound: a rough
+//! specular, metal or transmission lobe, not a delta) incident light is far from uniform — read as `E/π`, a rough-metal
 //! sphere comes out as a flat grey ball — so the path continues there as in the path
 //! tracer: next-event estimation with MIS weights, one BSDF sample of all its lobes,
 //! emission found by that ray weighted the other way, and at the next diffuse surface the
@@ -43,13 +43,16 @@
 //! paths of up to D + e − 1 segments in, so a depth-limited render is exact except in
 //! mirrors, glass and glossy reflections, where it keeps up to e − 1 more bounces of
 //! light than the limit (elements per photon depth would be needed for those).
+//!
+//! The walk itself (rays, throughput, the chain's state) is the shared eye kernel,
+//! [`crate::kernels::eye`]; this module is its reader for the elements.
 
 use super::element_map::ElementMesh;
 use super::reconstruct::ElementSolution;
 use crate::framework::integrator::RadianceEstimator;
 use crate::kernels::direct::{NeeWeight, bsdf_hit_weight, next_event};
-use chronolux_core::bsdf::microfacet::MIN_ALPHA;
-use chronolux_core::bsdf::{Bsdf, TransportMode};
+use crate::kernels::eye::{EyePath, EyeReader, EyeVertex, Step, Uniforms, walk};
+use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::{Bounds3, Ray, spawn_ray};
 use chronolux_core::math::Vec3;
@@ -75,14 +78,6 @@ pub struct DeptView<'a> {
     pub max_depth: Option<u32>,
 }
 
-/// True when `bsdf` has a non-delta lobe other than the Lambertian one (a rough
-/// dielectric specular layer, rough metal or rough transmission).
-pub fn is_glossy(bsdf: &Bsdf) -> bool {
-    let lo = &bsdf.lobes;
-    (lo.specular_weight > 0.0 || lo.metal_weight > 0.0 || lo.transmission_weight > 0.0)
-        && lo.alpha >= MIN_ALPHA
-}
-
 impl DeptView<'_> {
     /// One camera sample, split with [`crate::framework::integrator::LightSplit`]'s convention: direct = emission
     /// seen through delta bounces, and the light arriving straight from an emitter at the
@@ -104,161 +99,177 @@ impl DeptView<'_> {
         stats: &mut Stats,
         mut reach: Option<&mut Reach>,
     ) -> [Rgb; 3] {
-        let mut l = [Rgb::ZERO; 3];
-        let indirect = 2;
-        // Glossy (non-delta) vertices passed so far; as the path tracer's `scattered`.
-        let mut scattered = 0u32;
-        let slot = |scattered: u32, specular_bounce: bool| -> usize {
-            usize::from(!(scattered == 0 || (scattered == 1 && !specular_bounce)))
-        };
         if let Some(r) = reach.as_deref_mut() {
             r.origin(camera_ray.o);
         }
-        let mut beta = Rgb::ONE;
-        let mut ray = *camera_ray;
-        let mut specular_bounce = true;
-        let mut prev_pdf = 1.0f32;
-        let mut prev_p = Vec3::ZERO;
-        // A sky (light at infinity): light samples alone are noisy for it at diffuse
-        // surfaces, so direct light there is MIS of a light sample and the BSDF sample.
-        let sky = scene.environment_light.is_some();
-        // Segments a path may still have after the vertex reached by `bounce + 1` of them.
-        let room = |bounce: u32| {
-            self.max_depth
-                .map_or(u32::MAX, |d| d.saturating_sub(bounce + 1))
-        };
+        if self.max_depth == Some(0) {
+            return [Rgb::ZERO; 3];
+        }
         let last = match self.max_depth {
             Some(d) => self.max_specular_depth.min(d.saturating_sub(1)),
             None => self.max_specular_depth,
         };
-        if self.max_depth == Some(0) {
-            return l;
+        let mut reader = DeptReader {
+            view: self,
+            l: [Rgb::ZERO; 3],
+            reach,
+            // A sky (light at infinity): light samples alone are noisy for it at diffuse
+            // surfaces, so direct light there is MIS of a light sample and the BSDF sample.
+            sky: scene.environment_light.is_some(),
+            last,
+        };
+        walk(scene, camera_ray, last, &mut reader, sampler, stats);
+        reader.l
+    }
+
+    /// Segments a path may still have after the vertex reached by `bounce + 1` of them.
+    fn room(&self, bounce: u32) -> u32 {
+        self.max_depth
+            .map_or(u32::MAX, |d| d.saturating_sub(bounce + 1))
+    }
+}
+
+/// The element view's part of the eye walk (see the module documentation).
+struct DeptReader<'v, 'r> {
+    view: &'v DeptView<'v>,
+    /// `[direct, light-sampled indirect, elements]`, as [`DeptView::trace_parts`].
+    l: [Rgb; 3],
+    reach: Option<&'r mut Reach>,
+    sky: bool,
+    last: u32,
+}
+
+/// The part of [`DeptReader::l`] that emission found at `path`'s vertex goes to: direct
+/// when seen through delta bounces only, or straight after the first non-delta one.
+fn slot(path: &EyePath) -> usize {
+    usize::from(!(path.scattered == 0 || (path.scattered == 1 && !path.specular_bounce)))
+}
+
+/// The slot of the elements' term.
+const ELEMENTS: usize = 2;
+
+impl EyeReader for DeptReader<'_, '_> {
+    fn escaped(&mut self, scene: &FrameScene, path: &EyePath, _: &mut Stats) {
+        if let Some(r) = self.reach.as_deref_mut() {
+            *r = Reach::Unbounded;
         }
-        for bounce in 0..=last {
+        let Some(env) = &scene.environment else {
+            return;
+        };
+        let (beta, ray) = (path.beta, path.ray);
+        if path.bounce == 0 {
+            // The camera ray itself shows the backdrop.
+            self.l[0] += beta * env.seen_by_camera(ray.d);
+        } else {
+            let w = match (path.specular_bounce, scene.environment_light) {
+                (false, Some(ei)) => {
+                    bsdf_hit_weight(scene, ei, path.prev_p, path.prev_p + ray.d, path.prev_pdf)
+                }
+                _ => 1.0,
+            };
+            self.l[slot(path)] += beta * env.radiance(ray.d) * w;
+        }
+    }
+
+    fn surface<U: Uniforms>(
+        &mut self,
+        scene: &FrameScene,
+        path: &EyePath,
+        v: &EyeVertex,
+        u: &mut U,
+        stats: &mut Stats,
+    ) -> Step {
+        let (view, sky, beta, bounce) = (self.view, self.sky, path.beta, path.bounce);
+        let (si, wo, bsdf) = (v.si, v.wo, v.bsdf);
+        let l = &mut self.l;
+        if let Some(r) = self.reach.as_deref_mut() {
+            r.vertex(si.p);
+        }
+        let le = scene.emitted(si, wo);
+        if le != Rgb::ZERO {
+            // After a glossy vertex, MIS-weighted against its light sample.
+            let w = match (path.specular_bounce, scene.light_of(si.tri)) {
+                (false, Some(li)) => bsdf_hit_weight(scene, li, path.prev_p, si.p, path.prev_pdf),
+                _ => 1.0,
+            };
+            l[slot(path)] += beta * le * w;
+        }
+        let u_light = u.u1();
+        let u_lp = u.u2();
+        let u_lobe = u.u1();
+        let u_dir = u.u2();
+        // Continue through this glossy surface, or read the elements here.
+        let glossy =
+            bsdf.is_glossy(f32::INFINITY) && path.scattered < view.max_glossy && bounce < self.last;
+        if bsdf.has_non_delta() && view.room(bounce) >= 1 {
+            l[usize::from(path.scattered > 0)] += next_event(
+                scene,
+                si,
+                wo,
+                bsdf,
+                beta,
+                u_light,
+                u_lp,
+                if glossy || sky {
+                    NeeWeight::Mis
+                } else {
+                    NeeWeight::LightOnly
+                },
+                stats,
+            );
+        }
+        let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
+            return Step::Stop;
+        };
+        if bs.is_delta || glossy {
+            return Step::Continue {
+                sample: bs,
+                glossy: false,
+            };
+        }
+        // The BSDF-sampled emission is one more segment, the elements' paths at least
+        // two.
+        if sky && view.room(bounce) >= 1 {
+            // The other half of MIS: the BSDF-sampled ray's emission (sky or emitter),
+            // weighted against the light sample above.
             stats.rays += 1;
-            let Some(hit) = scene.intersect(&ray) else {
-                if let Some(r) = reach.as_deref_mut() {
-                    *r = Reach::Unbounded;
-                }
-                if let Some(env) = &scene.environment {
-                    if bounce == 0 {
-                        // The camera ray itself shows the backdrop.
-                        l[0] += beta * env.seen_by_camera(ray.d);
-                    } else {
-                        let w = match (specular_bounce, scene.environment_light) {
-                            (false, Some(ei)) => {
-                                bsdf_hit_weight(scene, ei, prev_p, prev_p + ray.d, prev_pdf)
-                            }
-                            _ => 1.0,
-                        };
-                        l[slot(scattered, specular_bounce)] += beta * env.radiance(ray.d) * w;
+            let r = spawn_ray(si.p, si.ng, bs.wi);
+            let s = usize::from(path.scattered > 0);
+            match scene.intersect(&r) {
+                None => {
+                    if let Some(rr) = self.reach.as_deref_mut() {
+                        *rr = Reach::Unbounded;
+                    }
+                    if let (Some(env), Some(ei)) = (&scene.environment, scene.environment_light) {
+                        l[s] += beta
+                            * bs.weight
+                            * env.radiance(r.d)
+                            * bsdf_hit_weight(scene, ei, si.p, si.p + r.d, bs.pdf);
                     }
                 }
-                break;
-            };
-            let si = scene.interaction(&hit, &ray);
-            if let Some(r) = reach.as_deref_mut() {
-                r.vertex(si.p);
-            }
-            let wo = -ray.d.normalize();
-            let le = scene.emitted(&si, wo);
-            if le != Rgb::ZERO {
-                // After a glossy vertex, MIS-weighted against its light sample.
-                let w = match (specular_bounce, scene.light_of(si.tri)) {
-                    (false, Some(li)) => bsdf_hit_weight(scene, li, prev_p, si.p, prev_pdf),
-                    _ => 1.0,
-                };
-                l[slot(scattered, specular_bounce)] += beta * le * w;
-            }
-            let bsdf = scene.bsdf(&si);
-            let u_light = sampler.next_1d();
-            let u_lp = sampler.next_2d();
-            let u_lobe = sampler.next_1d();
-            let u_dir = sampler.next_2d();
-            // Continue through this glossy surface, or read the elements here.
-            let glossy = is_glossy(&bsdf) && scattered < self.max_glossy && bounce < last;
-            if bsdf.has_non_delta() && room(bounce) >= 1 {
-                l[usize::from(scattered > 0)] += next_event(
-                    scene,
-                    &si,
-                    wo,
-                    &bsdf,
-                    beta,
-                    u_light,
-                    u_lp,
-                    if glossy || sky {
-                        NeeWeight::Mis
-                    } else {
-                        NeeWeight::LightOnly
-                    },
-                    stats,
-                );
-            }
-            let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
-                break;
-            };
-            if !bs.is_delta && !glossy {
-                // The BSDF-sampled emission is one more segment, the elements' paths at
-                // least two.
-                if sky && room(bounce) >= 1 {
-                    // The other half of MIS: the BSDF-sampled ray's emission (sky or
-                    // emitter), weighted against the light sample above.
-                    stats.rays += 1;
-                    let r = spawn_ray(si.p, si.ng, bs.wi);
-                    let s = usize::from(scattered > 0);
-                    match scene.intersect(&r) {
-                        None => {
-                            if let Some(rr) = reach.as_deref_mut() {
-                                *rr = Reach::Unbounded;
-                            }
-                            if let (Some(env), Some(ei)) =
-                                (&scene.environment, scene.environment_light)
-                            {
-                                l[s] += beta
-                                    * bs.weight
-                                    * env.radiance(r.d)
-                                    * bsdf_hit_weight(scene, ei, si.p, si.p + r.d, bs.pdf);
-                            }
+                Some(h2) => {
+                    let si2 = scene.interaction(&h2, &r);
+                    let le = scene.emitted(&si2, -r.d.normalize());
+                    if le != Rgb::ZERO
+                        && let Some(li) = scene.light_of(si2.tri)
+                    {
+                        if let Some(rr) = self.reach.as_deref_mut() {
+                            rr.vertex(si2.p);
                         }
-                        Some(h2) => {
-                            let si2 = scene.interaction(&h2, &r);
-                            let le = scene.emitted(&si2, -r.d.normalize());
-                            if le != Rgb::ZERO
-                                && let Some(li) = scene.light_of(si2.tri)
-                            {
-                                if let Some(rr) = reach.as_deref_mut() {
-                                    rr.vertex(si2.p);
-                                }
-                                l[s] += beta
-                                    * bs.weight
-                                    * le
-                                    * bsdf_hit_weight(scene, li, si.p, si2.p, bs.pdf);
-                            }
-                        }
+                        l[s] +=
+                            beta * bs.weight * le * bsdf_hit_weight(scene, li, si.p, si2.p, bs.pdf);
                     }
                 }
-                if room(bounce) >= 2 {
-                    let loc = self.mesh.locate(hit.tri, hit.b1, hit.b2);
-                    let front = wo.dot(si.ng) >= 0.0;
-                    let e = self.indirect.irradiance(&loc, front)
-                        + self.caustic.irradiance(&loc, front);
-                    l[indirect] += beta * bs.weight * e * FRAC_1_PI;
-                }
-                break;
             }
-            beta *= bs.weight;
-            if beta == Rgb::ZERO {
-                break;
-            }
-            specular_bounce = bs.is_delta;
-            if !bs.is_delta {
-                scattered += 1;
-            }
-            prev_pdf = bs.pdf;
-            prev_p = si.p;
-            ray = spawn_ray(si.p, si.ng, bs.wi);
         }
-        l
+        if view.room(bounce) >= 2 {
+            let hit = v.hit;
+            let loc = view.mesh.locate(hit.tri, hit.b1, hit.b2);
+            let front = wo.dot(si.ng) >= 0.0;
+            let e = view.indirect.irradiance(&loc, front) + view.caustic.irradiance(&loc, front);
+            l[ELEMENTS] += beta * bs.weight * e * FRAC_1_PI;
+        }
+        Step::Stop
     }
 }
 

@@ -10,14 +10,16 @@
 //!    independent Halton scrambling, keep their caustic hits (light → specular⁺ → here)
 //!    for the **caustic map**. Frame `f` uses photons `f·N ..` (a frame-by-frame baseline
 //!    decorrelates frames) unless `fixed_photons` is set (then `0..N` every frame).
-//! 2. **Eye paths** ([`view`]): emission seen directly or through delta chains; at every
-//!    vertex with a non-delta lobe, direct light by next-event estimation (the shared
-//!    kernel, [`crate::kernels::direct`], weight 1: emission is not picked up after a
-//!    non-delta bounce) and caustics from the caustic map (`Σ f(wo, wi_p) Φ_p w_p / area`).
-//!    A **glossy** vertex (GGX α below `glossy_alpha`, metal or transmitting or without a
-//!    diffuse base) continues the path by BSDF sampling (up to `max_glossy_depth`); a
-//!    delta lobe continues the chain; at the first other non-delta vertex the indirect
-//!    diffuse light is `β · f_sample · E(x)/π`, with `E` from the irradiance cache.
+//! 2. **Eye paths** ([`view`], a reader of the shared eye walk [`crate::kernels::eye`]):
+//!    emission seen directly or through delta chains; at every vertex with a non-delta
+//!    lobe, direct light by next-event estimation (the shared kernel,
+//!    [`crate::kernels::direct`], weight 1: emission is not picked up after a non-delta
+//!    bounce) and caustics from the caustic map (`Σ f(wo, wi_p) Φ_p w_p / area`). A
+//!    **glossy** vertex ([`view::follows_glossy`]: GGX α below `glossy_alpha`, metal or
+//!    transmitting or without a diffuse base) continues the path by BSDF sampling (up to
+//!    `max_glossy_depth`); a delta lobe continues the chain; at the first other non-delta
+//!    vertex the indirect diffuse light is `β · f_sample · E(x)/π`, with `E` from the
+//!    irradiance cache.
 //! 3. **Irradiance cache** ([`irradiance_cache`]): records made by **final gathering** (M×N
 //!    stratified cosine-weighted hemisphere; each gather ray follows delta chains without
 //!    counting emission, and reads the global map's radiance estimate at its first

@@ -1,15 +1,17 @@
 //! Eye paths of the photon-mapping techniques (see the parent module doc, step 2): one
 //! walk serves the render (radiance) and the probe pass (where the cache point of a pixel
-//! is), so both stop at the same kind of vertex.
+//! is), so both stop at the same kind of vertex. The walk is the shared eye kernel,
+//! [`crate::kernels::eye`]; this module is its reader for the photon maps and the cache.
 
 use super::PmIcSettings;
 use super::photon_map::PhotonMap;
 use crate::framework::integrator::RadianceEstimator;
 use crate::kernels::direct::{NeeWeight, next_event};
-use chronolux_core::bsdf::microfacet::MIN_ALPHA;
+pub use crate::kernels::eye::Uniforms;
+use crate::kernels::eye::{EyePath, EyeReader, EyeVertex, Step, walk};
 use chronolux_core::bsdf::{Bsdf, TransportMode};
 use chronolux_core::color::{Rgb, max_component};
-use chronolux_core::geometry::{Ray, spawn_ray};
+use chronolux_core::geometry::Ray;
 use chronolux_core::math::{Vec2, Vec3};
 use chronolux_core::sampling::rng::Pcg32;
 use chronolux_core::sampling::sampler::PixelSampler;
@@ -43,37 +45,13 @@ impl IndirectSource for NoIndirect {
     }
 }
 
-/// Uniform numbers for a walk.
-pub trait Uniforms {
-    fn u1(&mut self) -> f32;
-    fn u2(&mut self) -> Vec2;
-}
-
-impl Uniforms for PixelSampler {
-    fn u1(&mut self) -> f32 {
-        self.next_1d()
-    }
-    fn u2(&mut self) -> Vec2 {
-        self.next_2d()
-    }
-}
-
-impl Uniforms for Pcg32 {
-    fn u1(&mut self) -> f32 {
-        self.next_f32()
-    }
-    fn u2(&mut self) -> Vec2 {
-        Vec2::new(self.next_f32(), self.next_f32())
-    }
-}
-
-/// Whether a BSDF is traced as glossy (see the module doc).
-pub fn is_glossy(b: &Bsdf, glossy_alpha: f32) -> bool {
+/// Whether a BSDF is traced as glossy (see the module doc): a glossy lobe below
+/// `glossy_alpha` ([`Bsdf::is_glossy`]) that carries most of the surface's light (metal or
+/// transmitting, or with no diffuse base), so a plastic's glossy coating is read from the
+/// cache with its base.
+pub fn follows_glossy(b: &Bsdf, glossy_alpha: f32) -> bool {
     let l = &b.lobes;
-    let specular = l.metal_weight > 0.0 || l.transmission_weight > 0.0 || l.specular_weight > 0.0;
-    specular
-        && l.alpha >= MIN_ALPHA
-        && l.alpha < glossy_alpha
+    b.is_glossy(glossy_alpha)
         && (l.metal_weight + l.transmission_weight >= 0.5 || max_component(l.diffuse) == 0.0)
 }
 
@@ -126,111 +104,115 @@ impl<'a, S: IndirectSource> EyeView<'a, S> {
         camera_ray: &Ray,
         u: &mut U,
         stats: &mut Stats,
-        mut probe: Option<&mut Option<CacheQuery>>,
+        probe: Option<&mut Option<CacheQuery>>,
     ) -> Rgb {
         let s = self.settings;
-        let render = probe.is_none();
-        let mut l = Rgb::ZERO;
-        let mut beta = Rgb::ONE;
-        let mut ray = *camera_ray;
-        let mut path_len = 0.0f32;
-        let mut after_non_delta = false;
-        let mut glossy = 0u32;
-        for bounce in 0..=s.max_specular_depth + s.max_glossy_depth {
-            stats.rays += 1;
-            let Some(hit) = scene.intersect(&ray) else {
-                if render
-                    && !after_non_delta
-                    && let Some(env) = &scene.environment
-                {
-                    // The camera ray itself shows the backdrop (as in `dept`'s view).
-                    l += beta
-                        * if bounce == 0 {
-                            env.seen_by_camera(ray.d)
-                        } else {
-                            env.radiance(ray.d)
-                        };
-                }
-                break;
-            };
-            let si = scene.interaction(&hit, &ray);
-            path_len += (si.p - ray.o).length();
-            let wo = -ray.d.normalize();
-            if render && !after_non_delta {
-                l += beta * scene.emitted(&si, wo);
-            }
-            let bsdf = scene.bsdf(&si);
-            let u_light = u.u1();
-            let u_lp = u.u2();
-            let u_lobe = u.u1();
-            let u_dir = u.u2();
-            let wi = if bsdf.has_non_delta() {
-                let n = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };
-                let glossy_here = glossy < s.max_glossy_depth && is_glossy(&bsdf, s.glossy_alpha);
-                if !glossy_here && let Some(slot) = probe.as_deref_mut() {
-                    *slot = Some(CacheQuery {
-                        p: si.p,
-                        n,
-                        footprint: self.footprint0 + path_len * self.footprint_per_unit,
-                        instance: si.instance,
-                    });
-                    break;
-                }
-                if render {
-                    l += next_event(
-                        scene,
-                        &si,
-                        wo,
-                        &bsdf,
-                        beta,
-                        u_light,
-                        u_lp,
-                        NeeWeight::LightOnly,
-                        stats,
-                    );
-                    l += beta
-                        * self.caustic.radiance(
-                            si.p,
-                            n,
-                            wo,
-                            &bsdf,
-                            &s.caustic,
-                            self.caustic_radius,
-                        );
-                }
-                let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
-                    break;
+        let mut reader = GatherReader {
+            view: self,
+            l: Rgb::ZERO,
+            probe,
+        };
+        let last = s.max_specular_depth + s.max_glossy_depth;
+        walk(scene, camera_ray, last, &mut reader, u, stats);
+        reader.l
+    }
+}
+
+/// The photon-map view's part of the eye walk (see the module doc).
+struct GatherReader<'v, 'q, S: IndirectSource> {
+    view: &'v EyeView<'v, S>,
+    l: Rgb,
+    /// Where the probe pass stores the cache point; `None`: rendering.
+    probe: Option<&'q mut Option<CacheQuery>>,
+}
+
+impl<S: IndirectSource> EyeReader for GatherReader<'_, '_, S> {
+    fn escaped(&mut self, scene: &FrameScene, path: &EyePath, _: &mut Stats) {
+        if self.probe.is_none()
+            && path.scattered == 0
+            && let Some(env) = &scene.environment
+        {
+            // The camera ray itself shows the backdrop (as in `dept`'s view).
+            self.l += path.beta
+                * if path.bounce == 0 {
+                    env.seen_by_camera(path.ray.d)
+                } else {
+                    env.radiance(path.ray.d)
                 };
-                if glossy_here {
-                    if !bs.is_delta {
-                        after_non_delta = true;
-                        glossy += 1;
-                    }
-                } else if !bs.is_delta {
-                    let q = CacheQuery {
-                        p: si.p,
-                        n,
-                        footprint: self.footprint0 + path_len * self.footprint_per_unit,
-                        instance: si.instance,
-                    };
-                    l += beta * bs.weight * self.source.irradiance(scene, &q) * FRAC_1_PI;
-                    break;
-                }
-                beta *= bs.weight;
-                bs.wi
-            } else {
-                let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
-                    break;
-                };
-                beta *= bs.weight;
-                bs.wi
-            };
-            if beta == Rgb::ZERO {
-                break;
-            }
-            ray = spawn_ray(si.p, si.ng, wi);
         }
-        l
+    }
+
+    fn surface<U: Uniforms>(
+        &mut self,
+        scene: &FrameScene,
+        path: &EyePath,
+        v: &EyeVertex,
+        u: &mut U,
+        stats: &mut Stats,
+    ) -> Step {
+        let (view, beta) = (self.view, path.beta);
+        let s = view.settings;
+        let (si, wo, bsdf) = (v.si, v.wo, v.bsdf);
+        let render = self.probe.is_none();
+        // Emission is not picked up after a non-delta bounce (next-event estimation there
+        // has weight 1).
+        if render && path.scattered == 0 {
+            self.l += beta * scene.emitted(si, wo);
+        }
+        let u_light = u.u1();
+        let u_lp = u.u2();
+        let u_lobe = u.u1();
+        let u_dir = u.u2();
+        if !bsdf.has_non_delta() {
+            return match bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) {
+                Some(sample) => Step::Continue {
+                    sample,
+                    glossy: false,
+                },
+                None => Step::Stop,
+            };
+        }
+        let n = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };
+        let query = || CacheQuery {
+            p: si.p,
+            n,
+            footprint: view.footprint0 + path.length * view.footprint_per_unit,
+            instance: si.instance,
+        };
+        let glossy_here =
+            path.scattered < s.max_glossy_depth && follows_glossy(bsdf, s.glossy_alpha);
+        if !glossy_here && let Some(slot) = self.probe.as_deref_mut() {
+            *slot = Some(query());
+            return Step::Stop;
+        }
+        if render {
+            self.l += next_event(
+                scene,
+                si,
+                wo,
+                bsdf,
+                beta,
+                u_light,
+                u_lp,
+                NeeWeight::LightOnly,
+                stats,
+            );
+            self.l += beta
+                * view
+                    .caustic
+                    .radiance(si.p, n, wo, bsdf, &s.caustic, view.caustic_radius);
+        }
+        let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
+            return Step::Stop;
+        };
+        if !glossy_here && !bs.is_delta {
+            self.l += beta * bs.weight * view.source.irradiance(scene, &query()) * FRAC_1_PI;
+            return Step::Stop;
+        }
+        Step::Continue {
+            sample: bs,
+            glossy: false,
+        }
     }
 }
 
@@ -243,5 +225,21 @@ impl<S: IndirectSource> RadianceEstimator for EyeView<'_, S> {
         stats: &mut Stats,
     ) -> Rgb {
         self.walk(scene, camera_ray, sampler, stats, None)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::follows_glossy;
+    use crate::kernels::eye::glossy_cases;
+
+    /// The photon-map view follows a glossy lobe below `glossy_alpha` only where it
+    /// carries the surface's light: a glossy plastic's coating is read with its base.
+    #[test]
+    fn follows_glossy_metal_and_glass_not_plastic() {
+        for (name, b) in glossy_cases() {
+            let follows = ["glossy metal", "glossy glass"].contains(&name);
+            assert_eq!(follows_glossy(&b, 0.1), follows, "{name}");
+        }
     }
 }

@@ -58,7 +58,8 @@
 //!   `budget_ms`); leftover groups stay queued for the next frame (`groups_queued` in the
 //!   frame's report). The eye pass ([`view`]) takes direct light per pixel by
 //!   next-event estimation, diffuse indirect light from the (filtered) elements, and
-//!   traces glossy reflections on.
+//!   traces glossy reflections on (a reader of the shared eye walk,
+//!   [`crate::kernels::eye`]).
 //!
 //! ## Deviations from Dmitriev et al. 2002
 //! - Old paths are not re-traced in the old scene: their deposits are stored and

@@ -7,27 +7,34 @@
 //!   already counted by next-event estimation at the previous vertex;
 //! - **direct light** by next-event estimation through every non-delta lobe
 //!   ([`crate::kernels::direct::next_event`], weight 1), as the `dept` family does;
-//! - on a **rough** surface (no non-delta specular lobe, or one of perceptual roughness ≥
-//!   `glossy_roughness`), and on every surface once `max_glossy_depth` glossy bounces are
-//!   used, **indirect light** from the elements exactly as [`crate::kernels::elements::view`] reads it
-//!   (`f cos · E/π` estimated with one BSDF sample), and the path ends (or continues
-//!   through a delta lobe if one was sampled);
-//! - on a **glossy** surface the BSDF is split into its diffuse base and its specular
-//!   lobes (a [`Lobes`] copy with the other weights zeroed; the layering factor of the
-//!   base is unchanged because it depends on `specular`, `specular_f0` and α only): the
-//!   diffuse base reads the elements (`f_d cos · E/π`, one sample of the base alone), the
+//! - on a **rough** surface (no glossy specular lobe, [`Bsdf::is_glossy`] with α below
+//!   `glossy_roughness`², and no delta specular lobe over a diffuse base), and on every
+//!   surface once `max_glossy_depth` glossy vertices are passed, **indirect light** from
+//!   the elements exactly as [`crate::kernels::elements::view`] reads it (`f cos · E/π`
+//!   estimated with one BSDF sample), and the path ends (or continues through a delta
+//!   lobe if one was sampled);
+//! - on a **glossy** surface (and on a delta coating, mirror or glass over a diffuse
+//!   base, which counts as a glossy vertex too) the BSDF is split into its diffuse base
+//!   and its specular lobes (a [`Lobes`] copy with the other weights zeroed; the
+//!   layering factor of the base is unchanged because it depends on `specular`,
+//!   `specular_f0` and α only): the diffuse base reads the elements (`f_d cos · E/π`, one sample of the base alone), the
 //!   specular lobes are sampled and the path continues with their weight — the glossy
 //!   reflection of indirect light is traced, not read from the elements as if it were
 //!   diffuse (what `dept`'s eye pass does). The two parts are estimates of `f_d` and
 //!   `f − f_d`, so nothing is counted twice.
+//!
+//! The walk itself is the shared eye kernel, [`crate::kernels::eye`]; this module is its
+//! reader for the SPT solution.
 
 use crate::framework::integrator::RadianceEstimator;
 use crate::kernels::direct::{NeeWeight, next_event};
 use crate::kernels::elements::element_map::ElementMesh;
 use crate::kernels::elements::reconstruct::ElementSolution;
+use crate::kernels::eye::{EyePath, EyeReader, EyeVertex, Step, Uniforms, walk};
+use chronolux_core::bsdf::microfacet::MIN_ALPHA;
 use chronolux_core::bsdf::{Bsdf, Lobes, TransportMode};
 use chronolux_core::color::Rgb;
-use chronolux_core::geometry::{Ray, spawn_ray};
+use chronolux_core::geometry::Ray;
 use chronolux_core::sampling::sampler::PixelSampler;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::stats::Stats;
@@ -77,96 +84,145 @@ impl RadianceEstimator for SptView<'_> {
         sampler: &mut PixelSampler,
         stats: &mut Stats,
     ) -> Rgb {
-        let mut l = Rgb::ZERO;
-        let mut beta = Rgb::ONE;
-        let mut ray = *camera_ray;
-        let mut emission_counts = true;
-        let mut glossy = 0u32;
-        let alpha_glossy = self.glossy_roughness * self.glossy_roughness;
-        for bounce in 0..=(self.max_specular_depth + self.max_glossy_depth) {
-            stats.rays += 1;
-            let Some(hit) = scene.intersect(&ray) else {
-                if emission_counts && let Some(env) = &scene.environment {
-                    // The camera ray itself shows the backdrop (as in `dept`'s view).
-                    l += beta
-                        * if bounce == 0 {
-                            env.seen_by_camera(ray.d)
-                        } else {
-                            env.radiance(ray.d)
-                        };
-                }
-                break;
-            };
-            let si = scene.interaction(&hit, &ray);
-            let wo = -ray.d.normalize();
-            if emission_counts {
-                l += beta * scene.emitted(&si, wo);
-            }
-            let bsdf = scene.bsdf(&si);
-            let u_light = sampler.next_1d();
-            let u_lp = sampler.next_2d();
-            let u_lobe = sampler.next_1d();
-            let u_dir = sampler.next_2d();
-            let u_lobe2 = sampler.next_1d();
-            let u_dir2 = sampler.next_2d();
-            let non_delta = bsdf.has_non_delta();
-            if non_delta {
-                l += next_event(
-                    scene,
-                    &si,
-                    wo,
-                    &bsdf,
-                    beta,
-                    u_light,
-                    u_lp,
-                    NeeWeight::LightOnly,
-                    stats,
-                );
-            }
-            let loc = || self.mesh.locate(hit.tri, hit.b1, hit.b2);
-            let front = wo.dot(si.ng) >= 0.0;
-            let elements = |loc: &_| {
-                self.indirect.irradiance(loc, front) + self.caustic.irradiance(loc, front)
-            };
-            let is_glossy = non_delta
-                && bsdf.lobes.alpha < alpha_glossy
-                && glossy < self.max_glossy_depth
-                && (bsdf.lobes.specular_weight > 0.0
-                    || bsdf.lobes.metal_weight > 0.0
-                    || bsdf.lobes.transmission_weight > 0.0);
-            if is_glossy {
-                let (diffuse, spec) = split(&bsdf);
-                if let Some(d) = diffuse
-                    && let Some(bs) = d.sample(wo, u_lobe2, u_dir2, TransportMode::Radiance)
-                {
-                    l += beta * bs.weight * elements(&loc()) * FRAC_1_PI;
-                }
-                let Some(s) = spec else { break };
-                let Some(bs) = s.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
-                    break;
+        let mut reader = SptReader {
+            view: self,
+            l: Rgb::ZERO,
+            alpha_glossy: self.glossy_roughness * self.glossy_roughness,
+        };
+        let last = self.max_specular_depth + self.max_glossy_depth;
+        walk(scene, camera_ray, last, &mut reader, sampler, stats);
+        reader.l
+    }
+}
+
+/// The SPT view's part of the eye walk (see the module documentation).
+struct SptReader<'v> {
+    view: &'v SptView<'v>,
+    l: Rgb,
+    /// GGX α below which a specular lobe is glossy.
+    alpha_glossy: f32,
+}
+
+impl EyeReader for SptReader<'_> {
+    fn escaped(&mut self, scene: &FrameScene, path: &EyePath, _: &mut Stats) {
+        // Emission counts seen through delta bounces only.
+        if path.scattered == 0
+            && let Some(env) = &scene.environment
+        {
+            // The camera ray itself shows the backdrop (as in `dept`'s view).
+            self.l += path.beta
+                * if path.bounce == 0 {
+                    env.seen_by_camera(path.ray.d)
+                } else {
+                    env.radiance(path.ray.d)
                 };
-                beta *= bs.weight;
-                if beta == Rgb::ZERO {
-                    break;
-                }
-                glossy += 1;
-                emission_counts = bs.is_delta && emission_counts;
-                ray = spawn_ray(si.p, si.ng, bs.wi);
-                continue;
-            }
-            let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
-                break;
-            };
-            if !bs.is_delta {
-                l += beta * bs.weight * elements(&loc()) * FRAC_1_PI;
-                break;
-            }
-            beta *= bs.weight;
-            if beta == Rgb::ZERO {
-                break;
-            }
-            ray = spawn_ray(si.p, si.ng, bs.wi);
         }
-        l
+    }
+
+    fn surface<U: Uniforms>(
+        &mut self,
+        scene: &FrameScene,
+        path: &EyePath,
+        v: &EyeVertex,
+        u: &mut U,
+        stats: &mut Stats,
+    ) -> Step {
+        let (view, beta) = (self.view, path.beta);
+        let (si, wo, bsdf) = (v.si, v.wo, v.bsdf);
+        if path.scattered == 0 {
+            self.l += beta * scene.emitted(si, wo);
+        }
+        let u_light = u.u1();
+        let u_lp = u.u2();
+        let u_lobe = u.u1();
+        let u_dir = u.u2();
+        let u_lobe2 = u.u1();
+        let u_dir2 = u.u2();
+        let non_delta = bsdf.has_non_delta();
+        if non_delta {
+            self.l += next_event(
+                scene,
+                si,
+                wo,
+                bsdf,
+                beta,
+                u_light,
+                u_lp,
+                NeeWeight::LightOnly,
+                stats,
+            );
+        }
+        let loc = || view.mesh.locate(v.hit.tri, v.hit.b1, v.hit.b2);
+        let front = wo.dot(si.ng) >= 0.0;
+        let elements =
+            |loc: &_| view.indirect.irradiance(loc, front) + view.caustic.irradiance(loc, front);
+        if non_delta && path.glossy < view.max_glossy_depth && split_here(bsdf, self.alpha_glossy) {
+            let (diffuse, spec) = split(bsdf);
+            if let Some(d) = diffuse
+                && let Some(bs) = d.sample(wo, u_lobe2, u_dir2, TransportMode::Radiance)
+            {
+                self.l += beta * bs.weight * elements(&loc()) * FRAC_1_PI;
+            }
+            let Some(s) = spec else {
+                return Step::Stop;
+            };
+            return match s.sample(wo, u_lobe, u_dir, TransportMode::Radiance) {
+                Some(sample) => Step::Continue {
+                    sample,
+                    glossy: true,
+                },
+                None => Step::Stop,
+            };
+        }
+        let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
+            return Step::Stop;
+        };
+        if !bs.is_delta {
+            self.l += beta * bs.weight * elements(&loc()) * FRAC_1_PI;
+            return Step::Stop;
+        }
+        Step::Continue {
+            sample: bs,
+            glossy: false,
+        }
+    }
+}
+
+/// Whether the view splits `b` into its diffuse base and its specular lobes (see the
+/// module documentation): the specular lobes are glossy, or they are deltas over a
+/// diffuse base (the base then reads the elements every sample, and the mirror image or
+/// refraction is traced beside it, instead of one of the two chosen at random).
+fn split_here(b: &Bsdf, alpha_glossy: f32) -> bool {
+    let l = &b.lobes;
+    b.is_glossy(alpha_glossy)
+        || (l.alpha < MIN_ALPHA
+            && l.alpha < alpha_glossy
+            && l.diffuse != Rgb::ZERO
+            && (l.specular_weight > 0.0 || l.metal_weight > 0.0 || l.transmission_weight > 0.0))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::split_here;
+    use crate::kernels::eye::glossy_cases;
+
+    /// SPT splits glossy lobes below its bound and, as well, a delta coating over a
+    /// diffuse base (not a bare mirror or smooth glass: no base to split off).
+    #[test]
+    fn split_here_glossy_lobes_and_delta_coatings() {
+        for (name, b) in glossy_cases() {
+            let split = [
+                "smooth plastic",
+                "glossy plastic",
+                "glossy metal",
+                "glossy glass",
+            ]
+            .contains(&name);
+            assert_eq!(split_here(&b, 0.5 * 0.5), split, "{name}");
+        }
+        // No bound, no split: the delta coating's α is not below a zero bound either.
+        for (name, b) in glossy_cases() {
+            assert!(!split_here(&b, 0.0), "{name}");
+        }
     }
 }

@@ -47,7 +47,30 @@
 //!      remade with `pm-ic`'s radius limits and clamps.
 //! 5. **New records** where the probe points are not covered yet: exactly `pm-ic`'s
 //!    batched record creation ([`crate::kernels::gather::BATCH`]), every stratum cast in `f`.
-//! 6. The eye pass reads the cache as `pm-ic` does ([`CacheSource`]).
+//! 6. **The eye pass** reads the cache as `pm-ic` does
+//!    ([`crate::kernels::gather::CacheSource`]: Ward's interpolation), marking every
+//!    record it reads. A sample point that no record covers (sub-pixel jitter off the
+//!    probe points: silhouettes, grazing faces, the far side of an edge) gets a gather
+//!    there, as in `pm-ic` (same M × N rays reading the same map), but cast as the strata
+//!    of a record (numbers hashed from the point's key, its id [`EYE_ID`]` | key`).
+//! 7. **Those gathers become records** (`store_eye_gathers`, default on): sorted by point
+//!    key, each is added unless one added before it covers its point; records the eye
+//!    pass read stay in use in the next frame even if no probe point needs them (step 3).
+//!    From then on they are refreshed like any other record (priority, age), dropped when
+//!    their surface changes or neither the probe points nor the eye pass read them.
+//!
+//! ### Why step 7 (issue 41)
+//! Measured on cornell-moving at 64² (BENCHMARKS.md, issue 13): `pm-ic`'s eye pass makes
+//! 290–350 such *unstored gathers* per frame (≈ 125 000 gather rays, more than the whole
+//! selective refresh's 90 500 strata), and `ic-selective` kept them frame by frame. With
+//! a still camera the jittered sample points of frame `f + 1` fall where frame `f`'s did,
+//! so a gather kept as a record (valid radius ≥ `r_min_px` pixels) serves them by
+//! interpolation; per frame it costs its refresh (`refresh · M·N` strata) instead of
+//! a fresh gather at every uncovered point. It adds no new kind of error: those points
+//! are served by Ward's interpolation like every other point (the interpolation bound of
+//! [`crate::kernels::gather`]), and the records are invalidated by the animation's
+//! [`FrameDelta`] like the others. The order of the misses in the parallel eye pass does
+//! not matter: each gather depends only on its point, and they are inserted sorted.
 //!
 //! All numbers are hashed from `(seed, frame, record id, stratum)` (record ids count the
 //! records made, in creation order), records are created in `pm-ic`'s deterministic
@@ -78,11 +101,12 @@ use crate::kernels::gather::irradiance_cache::{
     stratum_direction,
 };
 use crate::kernels::gather::photon_map::PhotonMap;
-use crate::kernels::gather::view::{CacheQuery, EyeView, NoIndirect};
+use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource, NoIndirect};
 use crate::kernels::gather::{
-    BATCH, CacheSource, PmIcSettings, base_cell, frame_maps, gather_ray_hit, photon_base,
+    BATCH, PmIcSettings, base_cell, frame_maps, gather_ray_hit, photon_base, point_key,
     probe_points,
 };
+use chronolux_core::color::Rgb;
 use chronolux_core::geometry::Bounds3;
 use chronolux_core::math::{Frame, Vec3};
 use chronolux_core::parallel;
@@ -92,7 +116,8 @@ use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
 use std::collections::BTreeSet;
-use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use store::{MemoryStore, PagedStore, StoreStats, StrataStore, Stratum};
 
@@ -120,6 +145,9 @@ pub struct IcSelectiveSettings {
     /// default: no stale light), or leave such changes to the refresh by age like any
     /// other change of radiance at a hit (false: light lags by about `1/refresh` frames).
     pub recast_on_light_change: bool,
+    /// Keep the gathers the eye pass makes at points no record covers as records (true,
+    /// default; see the module doc), or discard them after use as `pm-ic` does (false).
+    pub store_eye_gathers: bool,
 }
 
 impl Default for IcSelectiveSettings {
@@ -132,6 +160,7 @@ impl Default for IcSelectiveSettings {
             cache_pages: 64,
             store_dir: String::new(),
             recast_on_light_change: true,
+            store_eye_gathers: true,
         }
     }
 }
@@ -150,6 +179,10 @@ pub struct SelRecord {
     pub footprint: f32,
     /// The record as the cache uses it (from the strata as of the last refresh).
     pub record: Record,
+    /// The previous frame's eye pass read it (kept then even if no probe point needs it).
+    pub eye_used: bool,
+    /// Made from an eye-pass point no record covered (not from a probe point).
+    pub from_eye: bool,
 }
 
 struct State {
@@ -213,8 +246,8 @@ impl State {
         kept
     }
 
-    /// Step 3: of `kept`, the records valid at one of this frame's probe `points` (the
-    /// others' slots are freed).
+    /// Step 3: of `kept`, the records valid at one of this frame's probe `points` or read
+    /// by the previous frame's eye pass (the others' slots are freed).
     fn keep_used(
         &mut self,
         kept: Vec<SelRecord>,
@@ -239,7 +272,7 @@ impl State {
         }
         let mut records = Vec::with_capacity(kept.len());
         for (r, u) in kept.into_iter().zip(used) {
-            if u {
+            if u || r.eye_used {
                 records.push(r);
             } else {
                 self.free.insert(r.slot);
@@ -341,11 +374,128 @@ impl State {
                     instance: q.instance,
                     footprint: q.footprint,
                     record: rec,
+                    eye_used: false,
+                    from_eye: false,
                 });
                 added += 1;
             }
         }
         (cache, added, t_store)
+    }
+
+    /// Step 7: the eye pass's gathers at points no record covered become records (in the
+    /// order of their point keys, each only if the records made before it in that order do
+    /// not cover it); every record's `eye_used` is set from the eye pass's reads. The
+    /// records added and the seconds spent in the store.
+    fn add_from_eye(
+        &mut self,
+        records: &mut Vec<SelRecord>,
+        cache: &mut IrradianceCache,
+        used: Vec<AtomicBool>,
+        mut misses: Vec<EyeMiss>,
+    ) -> (u64, f64) {
+        for (r, u) in records.iter_mut().zip(used) {
+            r.eye_used = u.into_inner();
+        }
+        misses.sort_by(|a, b| {
+            a.key
+                .cmp(&b.key)
+                .then(query_bits(&a.q).cmp(&query_bits(&b.q)))
+        });
+        let (mut added, mut t_store) = (0u64, 0.0f64);
+        for m in misses {
+            if cache.covers(m.q.p, m.q.n) {
+                continue;
+            }
+            let slot = self.alloc();
+            let ts = Instant::now();
+            self.store.write(slot, &m.strata);
+            t_store += ts.elapsed().as_secs_f64();
+            cache.insert(m.rec);
+            records.push(SelRecord {
+                id: m.id,
+                slot,
+                p: m.q.p,
+                n: m.q.n,
+                instance: m.q.instance,
+                footprint: m.q.footprint,
+                record: m.rec,
+                eye_used: true,
+                from_eye: true,
+            });
+            added += 1;
+        }
+        (added, t_store)
+    }
+}
+
+/// Bits of a query's point and normal (a total order for ties of [`point_key`]).
+fn query_bits(q: &CacheQuery) -> [u32; 6] {
+    [q.p.x, q.p.y, q.p.z, q.n.x, q.n.y, q.n.z].map(f32::to_bits)
+}
+
+/// Record ids of gathers made in the eye pass: the point's key with the top bit set
+/// (records made from probe points count from 0, so the two never meet).
+const EYE_ID: u64 = 1 << 63;
+
+/// A gather the eye pass made at a point no record covered, kept to become a record.
+struct EyeMiss {
+    key: u64,
+    id: u64,
+    q: CacheQuery,
+    strata: Vec<Stratum>,
+    rec: Record,
+}
+
+/// The eye pass's irradiance: Ward's interpolation of the frame's cache (as
+/// [`CacheSource`]), marking every record it reads; at a point no record covers, a gather
+/// cast as strata of a new record (same rays and estimate as `pm-ic`'s unstored gather,
+/// numbers from the point's key), kept for [`State::add_from_eye`].
+struct SelSource<'a> {
+    at: &'a Refresh<'a>,
+    cache: &'a IrradianceCache,
+    used: Vec<AtomicBool>,
+    misses: Mutex<Vec<EyeMiss>>,
+    /// Gathers made (whether kept or not).
+    gathers: AtomicU64,
+    /// `store_eye_gathers`: keep the misses (false: `pm-ic`'s unstored gathers).
+    keep: bool,
+}
+
+impl IndirectSource for SelSource<'_> {
+    fn irradiance(&self, _: &FrameScene, q: &CacheQuery) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        let mut wsum = 0.0f32;
+        self.cache.for_valid_indexed(q.p, q.n, |i, rec, eps| {
+            self.used[i].store(true, Ordering::Relaxed);
+            let w = 1.0 / eps.max(1e-6);
+            sum += rec.extrapolate(q.p, q.n) * w;
+            wsum += w;
+        });
+        if wsum > 0.0 {
+            return (sum / wsum).max(Rgb::ZERO);
+        }
+        let (at, s) = (self.at, self.at.s);
+        let key = point_key(q.p, q.n);
+        let id = key | EYE_ID;
+        let spr = (s.gather_m.max(1) * s.gather_n.max(1)) as usize;
+        let strata: Vec<Stratum> = (0..spr)
+            .map(|i| cast_stratum(at.scene, s, at.global, q.p, q.n, id, i, at.frame))
+            .collect();
+        let g = gather_of(s, id, q.n, &strata);
+        let rec = record_from(&s.cache, q.p, q.n, q.footprint, &g);
+        self.gathers.fetch_add(1, Ordering::Relaxed);
+        if self.keep {
+            let mut m = self.misses.lock().expect("no panic while held");
+            m.push(EyeMiss {
+                key,
+                id,
+                q: *q,
+                strata,
+                rec,
+            });
+        }
+        g.e
     }
 }
 
@@ -696,22 +846,36 @@ impl IcSelective {
         let (counts, mut t_store) = st.refresh(&mut records, &refresh, spr);
         let refreshed = records.len();
         // 5. New records where the view needs them (pm-ic's batches).
-        let (cache, added, t_add) = st.add_needed(&mut records, &points, &refresh, spr);
+        let (mut cache, added, t_add) = st.add_needed(&mut records, &points, &refresh, spr);
         t_store += t_add;
         let all_stale = change.all_stale;
-        st.records = records;
-        st.prev = scene_arc.clone();
         let t_cache = t0.elapsed().as_secs_f64() - t_photons;
 
-        let src = CacheSource {
-            settings: &s,
+        // 6. The eye pass.
+        let src = SelSource {
+            at: &refresh,
             cache: &cache,
-            global: &maps.global,
-            unstored: Default::default(),
+            used: (0..records.len()).map(|_| AtomicBool::new(false)).collect(),
+            misses: Mutex::new(Vec::new()),
+            gathers: AtomicU64::new(0),
+            keep: self.settings.store_eye_gathers,
         };
         let eye = EyeView::new(&s, scene, &maps.caustic, &src);
         let mut out = render_camera_rays(&eye, scene, frame, s.common.spp, s.common.seed, progress);
         out.stats.rays += maps.rays;
+        let SelSource {
+            used,
+            misses,
+            gathers: eye_gathers,
+            ..
+        } = src;
+        let eye_gathers = eye_gathers.into_inner();
+        // 7. The eye pass's gathers become records.
+        let misses = misses.into_inner().expect("no panic while held");
+        let (from_eye, t_eye) = st.add_from_eye(&mut records, &mut cache, used, misses);
+        t_store += t_eye;
+        st.records = records;
+        st.prev = scene_arc.clone();
         let stats = st.store.stats();
         let r = &mut out.report;
         r.insert("photons".into(), s.photons.into());
@@ -724,10 +888,11 @@ impl IcSelective {
         r.insert("strata_by_age".into(), counts.aged.into());
         r.insert(
             "strata_cast".into(),
-            (counts.priority + counts.aged + added * spr as u64).into(),
+            (counts.priority + counts.aged + (added + eye_gathers) * spr as u64).into(),
         );
+        r.insert("records_from_eye".into(), from_eye.into());
         r.insert("lights_or_materials_changed".into(), all_stale.into());
-        r.insert("unstored_gathers".into(), src.unstored.into_inner().into());
+        r.insert("unstored_gathers".into(), eye_gathers.into());
         r.insert("seconds_photons".into(), t_photons.into());
         r.insert("seconds_cache".into(), t_cache.into());
         r.insert("seconds_store".into(), t_store.into());

@@ -173,17 +173,38 @@ fn paged_and_memory_stores_give_identical_images() {
     assert_eq!(sa.record_writes, sb.record_writes);
 }
 
-/// No stale geometry: after every frame of the moving cube, (a) every stratum whose hit is
+/// `cornell_moving`'s cube sliding and turning about y by 45° per second (as
+/// cornell-moving's cube turns): its world box is then larger than the cube.
+fn turning_cube() -> SceneDesc {
+    let mut d = cornell_moving();
+    let node = d.animations[0].channels[0].node;
+    let h = 22.5f32.to_radians();
+    d.animations[0]
+        .channels
+        .push(chronolux_core::scene::desc::Channel {
+            node,
+            target: chronolux_core::scene::desc::ChannelTarget::Rotation,
+            interpolation: chronolux_core::scene::desc::Interpolation::Linear,
+            times: vec![0.0, 1.0],
+            values: vec![0.0, 0.0, 0.0, 1.0, 0.0, h.sin(), 0.0, h.cos()],
+            components: 4,
+        });
+    d
+}
+
+/// No stale geometry: after every frame of the sliding, turning cube, (a) every stratum whose hit is
 /// the cube was cast in that frame (the cube moves every frame), and (b) every stratum
 /// cast earlier, re-traced in this frame along its own direction, hits the same instance
 /// at the same distance, bit for bit (so neither the cube moving into nor out of a
-/// direction is missed). Also the priority refresh is exercised.
+/// direction is missed). Also the priority refresh is exercised, and so is the exact
+/// test behind the box test (some segments met the cube's box but not the cube, and were
+/// left to the refresh by age: (b) checks they were right to be).
 #[test]
 fn strata_reached_by_a_moving_object_are_recast_in_that_frame() {
     let frames: Vec<u32> = (0..6).collect();
     let s = small(5_000, 6, 18);
     let mut r = selective(s.clone(), false);
-    let mut src = crate::source(cornell_moving(), 16, 16, 24.0, frames.clone());
+    let mut src = crate::source(turning_cube(), 16, 16, 24.0, frames.clone());
     let (s0, s1) = (src.frame(0), src.frame(1));
     let cube = FrameDelta::between(&s0, &s1)
         .dynamic_instances()
@@ -191,10 +212,12 @@ fn strata_reached_by_a_moving_object_are_recast_in_that_frame() {
         .position(|c| *c)
         .expect("the cube moves") as u32;
     let mut priority = 0;
+    let mut box_only = 0;
     let mut checked = 0;
     for &f in &frames {
         let out = r.render_frame(&mut src, f, &|_| {});
         priority += out.report["strata_priority"].as_u64().unwrap();
+        box_only += out.report["strata_box_only"].as_u64().unwrap();
         let scene = src.frame(f);
         let recs = r.records().to_vec();
         for (i, rec) in recs.iter().enumerate() {
@@ -228,6 +251,7 @@ fn strata_reached_by_a_moving_object_are_recast_in_that_frame() {
         }
     }
     assert!(priority > 0, "no priority refresh happened");
+    assert!(box_only > 0, "the exact test never spared a stratum");
     assert!(checked > 1000, "only {checked} kept strata checked");
 }
 

@@ -67,13 +67,29 @@
 //! ### Why the exact priority test (issue 41)
 //! A box is exact for an axis-aligned box-shaped object, but cornell-moving's cube turns,
 //! and a turning cube's world box holds up to twice its cross-section: measured at 64²,
-//! 16k photons, the exact test spares 7 000–11 500 of 33 000–37 000 priority strata per
+//! 8k photons, frames 5–9, the exact test spares 7 000–11 500 of 32 000–37 000 priority strata per
 //! frame (≈ 30 %). Those strata are not free for long, though: the priority set counts
 //! against the per-record budget, so the budget's remainder goes to the refresh by age
 //! and the strata cast per frame fell by only ≈ 8 % (the cast count is set by the budget
 //! wherever the priority set fits in it). What it buys is less staleness at nearly equal
 //! cost; the cast count's floor is the budget plus the records rebuilt on the moving
 //! object (≈ 76 records, 33 000 strata per frame), which is what is left to cut there.
+//!
+//! ### Light changes: why not per-light strata (issue 41, not done)
+//! A light change still re-casts every stratum (step 4). Strata that kept one radiance per
+//! light (photons tagged with the light they left, one map per light) would let a light
+//! change re-evaluate only that light's term, but only where its photons arrive, and
+//! only at the cost of one lookup in its map. On the moving-light scene (a point light
+//! that sees the whole room, moving every frame) both fail: every gather hit receives its
+//! photons, and a profile of `pm-ic` there (`perf`, 64², 8k photons) puts ≈ 75 % of the
+//! time in the photon-map radiance estimate (k-NN search 29 %, sorting the neighbours
+//! 16 %, the estimate with its BSDF evaluations 29 %) and < 1 % in gather rays, so
+//! re-evaluating one light's term costs what re-casting the stratum costs. The next
+//! design: per-light maps whose radiance is precomputed at a subset of their photons once
+//! per frame (Christensen 1999), only for the lights that changed, so that a stratum's
+//! re-evaluation is one nearest-neighbour read in the changed light's map; with the
+//! other lights' terms kept per stratum, a moving light would then cost a fraction of a
+//! gather per stratum.
 //!
 //! ### Why step 7 (issue 41)
 //! Measured on cornell-moving at 64² (BENCHMARKS.md, issue 13): `pm-ic`'s eye pass makes

@@ -83,7 +83,8 @@
 //! that sees the whole room, moving every frame) both fail: every gather hit receives its
 //! photons, and a profile of `pm-ic` there (`perf`, 64², 8k photons) puts ≈ 75 % of the
 //! time in the photon-map radiance estimate (k-NN search 29 %, sorting the neighbours
-//! 16 %, the estimate with its BSDF evaluations 29 %) and < 1 % in gather rays, so
+//! 16 %, the estimate with its BSDF evaluations 29 %) and ≈ 4 % in ray casting of every
+//! kind, so
 //! re-evaluating one light's term costs what re-casting the stratum costs. The next
 //! design: per-light maps whose radiance is precomputed at a subset of their photons once
 //! per frame (Christensen 1999), only for the lights that changed, so that a stratum's

@@ -507,16 +507,19 @@ fn ic_selective_agrees_with_pm_ic_per_block_on_a_moving_cube() {
 
 /// Bit-identical images and reports (timings aside) for 1 and 3 threads over four frames
 /// of the moving cube, with the eye pass's gathers kept as records (their order in the
-/// parallel eye pass must not matter) and the paged store evicting.
+/// parallel eye pass must not matter) and the paged store evicting; and the same again
+/// on 2 threads with no buffer for the eye pass's strata (`eye_buffer_mb = 0`: every
+/// kept gather is cast again after the pass, which must give the same strata).
 #[test]
 fn ic_selective_is_deterministic_across_thread_counts() {
-    let render = |threads: usize| {
+    let render = |threads: usize, buffer_mb: u32| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .unwrap()
             .install(|| {
                 let mut r = selective(small(5_000, 6, 18), true);
+                r.settings.eye_buffer_mb = buffer_mb;
                 let frames = [0u32, 1, 2, 3];
                 let mut src = crate::source(cornell_moving(), 24, 24, 24.0, frames.to_vec());
                 frames
@@ -525,7 +528,7 @@ fn ic_selective_is_deterministic_across_thread_counts() {
                     .collect::<Vec<_>>()
             })
     };
-    let (a, b) = (render(1), render(3));
+    let (a, b, c) = (render(1, 64), render(3, 64), render(2, 0));
     let untimed = |r: &RenderedFrame| {
         r.report
             .iter()
@@ -538,6 +541,13 @@ fn ic_selective_is_deterministic_across_thread_counts() {
         assert!(bits(&x.pixels) == bits(&y.pixels), "frame {f} differs");
         assert_eq!(untimed(x), untimed(y), "frame {f}'s report differs");
         from_eye += x.report["records_from_eye"].as_u64().unwrap();
+    }
+    for (f, (x, z)) in a.iter().zip(&c).enumerate() {
+        assert!(
+            bits(&x.pixels) == bits(&z.pixels),
+            "frame {f} differs without the eye buffer"
+        );
+        assert_eq!(untimed(x), untimed(z), "frame {f}'s report differs");
     }
     assert!(from_eye > 0, "the eye pass's gathers were not exercised");
 }

@@ -124,7 +124,11 @@
 //! In memory per record: position, normal, the record itself and bookkeeping (≈ 160
 //! bytes, plus its entries in the cache's grid, rebuilt each frame); the strata (`24 · M · N` bytes per record, 10 KiB at 12 × 36) are in the
 //! store, whose resident part is bounded by `cache_pages × page_kb` KiB with the paged
-//! store (plus one chunk of [`CHUNK`] records' strata being refreshed).
+//! store (plus one chunk of [`CHUNK`] records' strata being refreshed). The eye pass's
+//! gathers (step 6) hold their strata until the pass ends up to `eye_buffer_mb` MiB
+//! (default 64, ≈ 6 000 gathers at 12 × 36; cornell-moving at 64² makes ≈ 300 in its
+//! first frame); beyond that a miss keeps ≈ 150 bytes and, if it becomes a record, its
+//! strata are cast again after the pass (same numbers, same strata).
 
 pub mod store;
 
@@ -149,7 +153,7 @@ use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
 use std::collections::BTreeSet;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use store::{MemoryStore, PagedStore, StoreStats, StrataStore, Stratum};
@@ -181,6 +185,9 @@ pub struct IcSelectiveSettings {
     /// Keep the gathers the eye pass makes at points no record covers as records (true,
     /// default; see the module doc), or discard them after use as `pm-ic` does (false).
     pub store_eye_gathers: bool,
+    /// Most MiB of the eye pass's gathers' strata held until the pass ends (beyond it, a
+    /// gather that becomes a record is cast again after the pass). Default 64.
+    pub eye_buffer_mb: u32,
     /// Re-cast a stratum whose segment meets a changed instance's box only if it meets
     /// that instance's geometry in the previous or this frame (true, default), or on the
     /// box alone (false).
@@ -198,6 +205,7 @@ impl Default for IcSelectiveSettings {
             store_dir: String::new(),
             recast_on_light_change: true,
             store_eye_gathers: true,
+            eye_buffer_mb: 64,
             exact_priority: true,
         }
     }
@@ -445,6 +453,7 @@ impl State {
         cache: &mut IrradianceCache,
         used: Vec<AtomicBool>,
         mut misses: Vec<EyeMiss>,
+        at: &Refresh,
     ) -> (u64, f64) {
         for (r, u) in records.iter_mut().zip(used) {
             r.eye_used = u.into_inner();
@@ -454,16 +463,34 @@ impl State {
                 .cmp(&b.key)
                 .then(query_bits(&a.q).cmp(&query_bits(&b.q)))
         });
-        let (mut added, mut t_store) = (0u64, 0.0f64);
+        let mut kept = Vec::new();
         for m in misses {
-            if cache.covers(m.q.p, m.q.n) {
-                continue;
+            if !cache.covers(m.q.p, m.q.n) {
+                cache.insert(m.rec);
+                kept.push(m);
             }
+        }
+        // Strata the eye pass did not buffer (over `eye_buffer_mb`) are cast again: the
+        // same numbers, so the same strata bit for bit.
+        let spr = (at.s.gather_m.max(1) * at.s.gather_n.max(1)) as usize;
+        let redo: Vec<usize> = (0..kept.len())
+            .filter(|&i| kept[i].strata.is_empty())
+            .collect();
+        let recast = parallel::map_chunks(redo.len(), 1, |r| {
+            let m = &kept[redo[r.start]];
+            (0..spr)
+                .map(|i| cast_stratum(at.scene, at.s, at.global, m.q.p, m.q.n, m.id, i, at.frame))
+                .collect::<Vec<Stratum>>()
+        });
+        for (i, strata) in redo.into_iter().zip(recast) {
+            kept[i].strata = strata;
+        }
+        let (mut added, mut t_store) = (0u64, 0.0f64);
+        for m in kept {
             let slot = self.alloc();
             let ts = Instant::now();
             self.store.write(slot, &m.strata);
             t_store += ts.elapsed().as_secs_f64();
-            cache.insert(m.rec);
             records.push(SelRecord {
                 id: m.id,
                 slot,
@@ -495,6 +522,7 @@ struct EyeMiss {
     key: u64,
     id: u64,
     q: CacheQuery,
+    /// Its strata, or empty when the eye pass's buffer was full (cast again if kept).
     strata: Vec<Stratum>,
     rec: Record,
 }
@@ -510,6 +538,9 @@ struct SelSource<'a> {
     misses: Mutex<Vec<EyeMiss>>,
     /// Gathers made (whether kept or not).
     gathers: AtomicU64,
+    /// Bytes of strata buffered so far, and the most that may be (`eye_buffer_mb`).
+    buffered: AtomicUsize,
+    buffer_cap: usize,
     /// `store_eye_gathers`: keep the misses (false: `pm-ic`'s unstored gathers).
     keep: bool,
 }
@@ -538,12 +569,16 @@ impl IndirectSource for SelSource<'_> {
         let rec = record_from(&s.cache, q.p, q.n, q.footprint, &g);
         self.gathers.fetch_add(1, Ordering::Relaxed);
         if self.keep {
+            // Which misses keep their strata depends on the threads' order, what is stored
+            // does not (a dropped block is cast again, identically, if its record is kept).
+            let bytes = strata.len() * std::mem::size_of::<Stratum>();
+            let fits = self.buffered.fetch_add(bytes, Ordering::Relaxed) + bytes <= self.buffer_cap;
             let mut m = self.misses.lock().expect("no panic while held");
             m.push(EyeMiss {
                 key,
                 id,
                 q: *q,
-                strata,
+                strata: if fits { strata } else { Vec::new() },
                 rec,
             });
         }
@@ -951,6 +986,8 @@ impl IcSelective {
             used: (0..records.len()).map(|_| AtomicBool::new(false)).collect(),
             misses: Mutex::new(Vec::new()),
             gathers: AtomicU64::new(0),
+            buffered: AtomicUsize::new(0),
+            buffer_cap: self.settings.eye_buffer_mb as usize * (1 << 20),
             keep: self.settings.store_eye_gathers,
         };
         let eye = EyeView::new(&s, scene, &maps.caustic, &src);
@@ -965,7 +1002,7 @@ impl IcSelective {
         let eye_gathers = eye_gathers.into_inner();
         // 7. The eye pass's gathers become records.
         let misses = misses.into_inner().expect("no panic while held");
-        let (from_eye, t_eye) = st.add_from_eye(&mut records, &mut cache, used, misses);
+        let (from_eye, t_eye) = st.add_from_eye(&mut records, &mut cache, used, misses, &refresh);
         t_store += t_eye;
         st.records = records;
         st.prev = scene_arc.clone();

@@ -24,7 +24,12 @@
 //!    - **priority** strata, re-cast whatever their age: those whose hit instance changed
 //!      (moved or deformed), and those whose ray segment (record → hit, or unbounded when
 //!      nothing was hit) crosses the world box of a changed instance in the previous or
-//!      this frame (an object that moved into or out of the direction); **all** strata
+//!      this frame (an object that moved into or out of the direction) **and** meets the
+//!      changed geometry itself in one of the two frames (`exact_priority`, default on:
+//!      one any-hit query per such segment against each frame reduced to its changed
+//!      instances, [`FrameScene::without_instances`]; both tests are necessary conditions
+//!      for the first hit to change, so their conjunction still re-casts every stratum
+//!      whose hit changed, checked bit for bit in `tests/it/icsel.rs`); **all** strata
 //!      when a light or a material changed ([`FrameDelta::lights_changed`]: the maps'
 //!      radiance at every hit may differ, and the kernel cannot tell which light a hit's
 //!      photons came from, so no subset is known to be unaffected; with
@@ -47,7 +52,60 @@
 //!      remade with `pm-ic`'s radius limits and clamps.
 //! 5. **New records** where the probe points are not covered yet: exactly `pm-ic`'s
 //!    batched record creation ([`crate::kernels::gather::BATCH`]), every stratum cast in `f`.
-//! 6. The eye pass reads the cache as `pm-ic` does ([`CacheSource`]).
+//! 6. **The eye pass** reads the cache as `pm-ic` does
+//!    ([`crate::kernels::gather::CacheSource`]: Ward's interpolation), marking every
+//!    record it reads. A sample point that no record covers (sub-pixel jitter off the
+//!    probe points: silhouettes, grazing faces, the far side of an edge) gets a gather
+//!    there, as in `pm-ic` (same M × N rays reading the same map), but cast as the strata
+//!    of a record (numbers hashed from the point's key; its record id is the key with the
+//!    top bit set, so it never meets the ids counted from 0 for probe-point records).
+//! 7. **Those gathers become records** (`store_eye_gathers`, default on): sorted by point
+//!    key, each is added unless one added before it covers its point; records the eye
+//!    pass read stay in use in the next frame even if no probe point needs them (step 3).
+//!    From then on they are refreshed like any other record (priority, age), dropped when
+//!    their surface changes or neither the probe points nor the eye pass read them.
+//!
+//! ### Why the exact priority test (issue 41)
+//! A box is exact for an axis-aligned box-shaped object, but cornell-moving's cube turns,
+//! and a turning cube's world box holds up to twice its cross-section: measured at 64²,
+//! 8k photons, frames 5–9, the exact test spares 7 000–11 500 of 32 000–37 000 priority
+//! strata per frame (≈ 30 %). Those strata are not free for long, though: the priority set counts
+//! against the per-record budget, so the budget's remainder goes to the refresh by age
+//! and the strata cast per frame fell by only ≈ 8 % (the cast count is set by the budget
+//! wherever the priority set fits in it). What it buys is less staleness at nearly equal
+//! cost; the cast count's floor is the budget plus the records rebuilt on the moving
+//! object (≈ 76 records, 33 000 strata per frame), which is what is left to cut there.
+//!
+//! ### Light changes: why not per-light strata (issue 41, not done)
+//! A light change still re-casts every stratum (step 4). Strata that kept one radiance per
+//! light (photons tagged with the light they left, one map per light) would let a light
+//! change re-evaluate only that light's term, but only where its photons arrive, and
+//! only at the cost of one lookup in its map. On the moving-light scene (a point light
+//! that sees the whole room, moving every frame) both fail: every gather hit receives its
+//! photons, and a profile of `pm-ic` there (`perf`, 64², 8k photons) puts ≈ 75 % of the
+//! time in the photon-map radiance estimate (k-NN search 29 %, sorting the neighbours
+//! 16 %, the estimate with its BSDF evaluations 29 %) and ≈ 4 % in ray casting of every
+//! kind, so re-evaluating one light's term costs what re-casting the stratum costs. The next
+//! design: per-light maps whose radiance is precomputed at a subset of their photons once
+//! per frame (Christensen 1999), only for the lights that changed, so that a stratum's
+//! re-evaluation is one nearest-neighbour read in the changed light's map; with the
+//! other lights' terms kept per stratum, a moving light would then cost a fraction of a
+//! gather per stratum.
+//!
+//! ### Why step 7 (issue 41)
+//! Measured on cornell-moving at 64² (BENCHMARKS.md, issue 13): `pm-ic`'s eye pass makes
+//! 290–350 such *unstored gathers* per frame (≈ 125 000 gather rays, more than the whole
+//! selective refresh's 90 500 strata), and `ic-selective` made them anew every frame.
+//! With a still camera the jittered sample points of frame `f + 1` fall on the same
+//! pixels and surfaces as frame `f`'s, so a gather kept as a record (valid radius ≥
+//! `r_min_px` pixels) serves them by interpolation; per frame it costs its refresh
+//! (`refresh · M·N` strata) instead of a fresh gather at every uncovered point. Measured
+//! (64², 8k photons, frames 4–15): 313 gathers in the first frame (85 kept as records),
+//! then 52, 44, 26, 8, 5, … 13; the 12 frames took 5.46 CPU s instead of 9.10. It adds no new kind of error: those points
+//! are served by Ward's interpolation like every other point (the interpolation bound of
+//! [`crate::kernels::gather`]), and the records are invalidated by the animation's
+//! [`FrameDelta`] like the others. The order of the misses in the parallel eye pass does
+//! not matter: each gather depends only on its point, and they are inserted sorted.
 //!
 //! All numbers are hashed from `(seed, frame, record id, stratum)` (record ids count the
 //! records made, in creation order), records are created in `pm-ic`'s deterministic
@@ -66,9 +124,14 @@
 //!
 //! ## Memory
 //! In memory per record: position, normal, the record itself and bookkeeping (≈ 160
-//! bytes, plus its entries in the cache's grid, rebuilt each frame); the strata (`24 · M · N` bytes per record, 10 KiB at 12 × 36) are in the
-//! store, whose resident part is bounded by `cache_pages × page_kb` KiB with the paged
-//! store (plus one chunk of [`CHUNK`] records' strata being refreshed).
+//! bytes, plus its entries in the cache's grid, rebuilt each frame); the strata
+//! (`24 · M · N` bytes per record, 10 KiB at 12 × 36) are in the store, whose resident
+//! part is bounded by `cache_pages × page_kb` KiB with the paged store (plus one chunk of
+//! [`CHUNK`] records' strata being refreshed). The eye pass's
+//! gathers (step 6) hold their strata until the pass ends up to `eye_buffer_mb` MiB
+//! (default 64, ≈ 6 000 gathers at 12 × 36; cornell-moving at 64² makes ≈ 300 in its
+//! first frame); beyond that a miss keeps ≈ 150 bytes and, if it becomes a record, its
+//! strata are cast again after the pass (same numbers, same strata).
 
 pub mod store;
 
@@ -78,12 +141,13 @@ use crate::kernels::gather::irradiance_cache::{
     stratum_direction,
 };
 use crate::kernels::gather::photon_map::PhotonMap;
-use crate::kernels::gather::view::{CacheQuery, EyeView, NoIndirect};
+use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource, NoIndirect};
 use crate::kernels::gather::{
-    BATCH, CacheSource, PmIcSettings, base_cell, frame_maps, gather_ray_hit, photon_base,
+    BATCH, PmIcSettings, base_cell, frame_maps, gather_ray_hit, photon_base, point_key,
     probe_points,
 };
-use chronolux_core::geometry::Bounds3;
+use chronolux_core::color::Rgb;
+use chronolux_core::geometry::{Bounds3, spawn_ray};
 use chronolux_core::math::{Frame, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::hash_words;
@@ -92,7 +156,8 @@ use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
 use std::collections::BTreeSet;
-use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use store::{MemoryStore, PagedStore, StoreStats, StrataStore, Stratum};
 
@@ -120,6 +185,16 @@ pub struct IcSelectiveSettings {
     /// default: no stale light), or leave such changes to the refresh by age like any
     /// other change of radiance at a hit (false: light lags by about `1/refresh` frames).
     pub recast_on_light_change: bool,
+    /// Keep the gathers the eye pass makes at points no record covers as records (true,
+    /// default; see the module doc), or discard them after use as `pm-ic` does (false).
+    pub store_eye_gathers: bool,
+    /// Most MiB of the eye pass's gathers' strata held until the pass ends (beyond it, a
+    /// gather that becomes a record is cast again after the pass). Default 64.
+    pub eye_buffer_mb: u32,
+    /// Re-cast a stratum whose segment meets a changed instance's box only if it meets
+    /// that instance's geometry in the previous or this frame (true, default), or on the
+    /// box alone (false).
+    pub exact_priority: bool,
 }
 
 impl Default for IcSelectiveSettings {
@@ -132,6 +207,9 @@ impl Default for IcSelectiveSettings {
             cache_pages: 64,
             store_dir: String::new(),
             recast_on_light_change: true,
+            store_eye_gathers: true,
+            eye_buffer_mb: 64,
+            exact_priority: true,
         }
     }
 }
@@ -150,6 +228,10 @@ pub struct SelRecord {
     pub footprint: f32,
     /// The record as the cache uses it (from the strata as of the last refresh).
     pub record: Record,
+    /// The previous frame's eye pass read it (kept then even if no probe point needs it).
+    pub eye_used: bool,
+    /// Made from an eye-pass point no record covered (not from a probe point).
+    pub from_eye: bool,
 }
 
 struct State {
@@ -182,20 +264,33 @@ struct Change {
     /// (padded bounds of a moved instance's vertices, of a deformed one's changed
     /// triangles).
     boxes: Vec<Bounds3>,
+    /// The previous and this frame with only the changed instances in them (the exact
+    /// test of a ray segment against the changed geometry; `None` when nothing changed
+    /// or `exact_priority` is off).
+    exact: Option<(FrameScene, FrameScene)>,
 }
 
 /// The phases of [`IcSelective::render`] that update the kept records (the module doc's
 /// steps 1 to 5), in order.
 impl State {
-    fn change_to(&self, scene: &FrameScene, recast_on_light_change: bool) -> Change {
+    fn change_to(&self, scene: &FrameScene, recast_on_light_change: bool, exact: bool) -> Change {
         let delta = FrameDelta::between(&self.prev, scene);
         let changed = delta.dynamic_instances();
         let all_stale =
             recast_on_light_change && (delta.lights_changed() || delta.materials_changed());
+        let boxes = delta.changed_bounds();
+        let exact = (exact && !boxes.is_empty()).then(|| {
+            let still: Vec<bool> = changed.iter().map(|c| !c).collect();
+            (
+                self.prev.without_instances(&still),
+                scene.without_instances(&still),
+            )
+        });
         Change {
             changed,
             all_stale,
-            boxes: delta.changed_bounds(),
+            boxes,
+            exact,
         }
     }
 
@@ -213,8 +308,8 @@ impl State {
         kept
     }
 
-    /// Step 3: of `kept`, the records valid at one of this frame's probe `points` (the
-    /// others' slots are freed).
+    /// Step 3: of `kept`, the records valid at one of this frame's probe `points` or read
+    /// by the previous frame's eye pass (the others' slots are freed).
     fn keep_used(
         &mut self,
         kept: Vec<SelRecord>,
@@ -239,7 +334,7 @@ impl State {
         }
         let mut records = Vec::with_capacity(kept.len());
         for (r, u) in kept.into_iter().zip(used) {
-            if u {
+            if u || r.eye_used {
                 records.push(r);
             } else {
                 self.free.insert(r.slot);
@@ -284,6 +379,7 @@ impl State {
                 r.record = rec;
                 counts.priority += c.priority;
                 counts.aged += c.aged;
+                counts.box_only += c.box_only;
             }
             t_store += ts.elapsed().as_secs_f64();
         }
@@ -341,11 +437,155 @@ impl State {
                     instance: q.instance,
                     footprint: q.footprint,
                     record: rec,
+                    eye_used: false,
+                    from_eye: false,
                 });
                 added += 1;
             }
         }
         (cache, added, t_store)
+    }
+
+    /// Step 7: the eye pass's gathers at points no record covered become records (in the
+    /// order of their point keys, each only if the records made before it in that order do
+    /// not cover it); every record's `eye_used` is set from the eye pass's reads. The
+    /// records added and the seconds spent in the store.
+    fn add_from_eye(
+        &mut self,
+        records: &mut Vec<SelRecord>,
+        cache: &mut IrradianceCache,
+        used: Vec<AtomicBool>,
+        mut misses: Vec<EyeMiss>,
+        at: &Refresh,
+    ) -> (u64, f64) {
+        for (r, u) in records.iter_mut().zip(used) {
+            r.eye_used = u.into_inner();
+        }
+        misses.sort_by(|a, b| {
+            a.key
+                .cmp(&b.key)
+                .then(query_bits(&a.q).cmp(&query_bits(&b.q)))
+        });
+        let mut kept = Vec::new();
+        for m in misses {
+            if !cache.covers(m.q.p, m.q.n) {
+                cache.insert(m.rec);
+                kept.push(m);
+            }
+        }
+        // Strata the eye pass did not buffer (over `eye_buffer_mb`) are cast again: the
+        // same numbers, so the same strata bit for bit.
+        let spr = (at.s.gather_m.max(1) * at.s.gather_n.max(1)) as usize;
+        let redo: Vec<usize> = (0..kept.len())
+            .filter(|&i| kept[i].strata.is_empty())
+            .collect();
+        let recast = parallel::map_chunks(redo.len(), 1, |r| {
+            let m = &kept[redo[r.start]];
+            (0..spr)
+                .map(|i| cast_stratum(at.scene, at.s, at.global, m.q.p, m.q.n, m.id, i, at.frame))
+                .collect::<Vec<Stratum>>()
+        });
+        for (i, strata) in redo.into_iter().zip(recast) {
+            kept[i].strata = strata;
+        }
+        let (mut added, mut t_store) = (0u64, 0.0f64);
+        for m in kept {
+            let slot = self.alloc();
+            let ts = Instant::now();
+            self.store.write(slot, &m.strata);
+            t_store += ts.elapsed().as_secs_f64();
+            records.push(SelRecord {
+                id: m.id,
+                slot,
+                p: m.q.p,
+                n: m.q.n,
+                instance: m.q.instance,
+                footprint: m.q.footprint,
+                record: m.rec,
+                eye_used: true,
+                from_eye: true,
+            });
+            added += 1;
+        }
+        (added, t_store)
+    }
+}
+
+/// Bits of a query's point and normal (a total order for ties of [`point_key`]).
+fn query_bits(q: &CacheQuery) -> [u32; 6] {
+    [q.p.x, q.p.y, q.p.z, q.n.x, q.n.y, q.n.z].map(f32::to_bits)
+}
+
+/// Record ids of gathers made in the eye pass: the point's key with the top bit set
+/// (records made from probe points count from 0, so the two never meet).
+const EYE_ID: u64 = 1 << 63;
+
+/// A gather the eye pass made at a point no record covered, kept to become a record.
+struct EyeMiss {
+    key: u64,
+    id: u64,
+    q: CacheQuery,
+    /// Its strata, or empty when the eye pass's buffer was full (cast again if kept).
+    strata: Vec<Stratum>,
+    rec: Record,
+}
+
+/// The eye pass's irradiance: Ward's interpolation of the frame's cache (as
+/// [`CacheSource`]), marking every record it reads; at a point no record covers, a gather
+/// cast as strata of a new record (same rays and estimate as `pm-ic`'s unstored gather,
+/// numbers from the point's key), kept for [`State::add_from_eye`].
+struct SelSource<'a> {
+    at: &'a Refresh<'a>,
+    cache: &'a IrradianceCache,
+    used: Vec<AtomicBool>,
+    misses: Mutex<Vec<EyeMiss>>,
+    /// Gathers made (whether kept or not).
+    gathers: AtomicU64,
+    /// Bytes of strata buffered so far, and the most that may be (`eye_buffer_mb`).
+    buffered: AtomicUsize,
+    buffer_cap: usize,
+    /// `store_eye_gathers`: keep the misses (false: `pm-ic`'s unstored gathers).
+    keep: bool,
+}
+
+impl IndirectSource for SelSource<'_> {
+    fn irradiance(&self, _: &FrameScene, q: &CacheQuery) -> Rgb {
+        let mut sum = Rgb::ZERO;
+        let mut wsum = 0.0f32;
+        self.cache.for_valid_indexed(q.p, q.n, |i, rec, eps| {
+            self.used[i].store(true, Ordering::Relaxed);
+            let w = 1.0 / eps.max(1e-6);
+            sum += rec.extrapolate(q.p, q.n) * w;
+            wsum += w;
+        });
+        if wsum > 0.0 {
+            return (sum / wsum).max(Rgb::ZERO);
+        }
+        let (at, s) = (self.at, self.at.s);
+        let key = point_key(q.p, q.n);
+        let id = key | EYE_ID;
+        let spr = (s.gather_m.max(1) * s.gather_n.max(1)) as usize;
+        let strata: Vec<Stratum> = (0..spr)
+            .map(|i| cast_stratum(at.scene, s, at.global, q.p, q.n, id, i, at.frame))
+            .collect();
+        let g = gather_of(s, id, q.n, &strata);
+        let rec = record_from(&s.cache, q.p, q.n, q.footprint, &g);
+        self.gathers.fetch_add(1, Ordering::Relaxed);
+        if self.keep {
+            // Which misses keep their strata depends on the threads' order, what is stored
+            // does not (a dropped block is cast again, identically, if its record is kept).
+            let bytes = strata.len() * std::mem::size_of::<Stratum>();
+            let fits = self.buffered.fetch_add(bytes, Ordering::Relaxed) + bytes <= self.buffer_cap;
+            let mut m = self.misses.lock().expect("no panic while held");
+            m.push(EyeMiss {
+                key,
+                id,
+                q: *q,
+                strata: if fits { strata } else { Vec::new() },
+                rec,
+            });
+        }
+        g.e
     }
 }
 
@@ -534,6 +774,28 @@ fn segment_meets(b: &Bounds3, o: Vec3, d: Vec3, t_max: f32) -> bool {
     true
 }
 
+/// Whether the gather segment from the record at (p, n) along `d` up to its old hit
+/// distance `dist` (unbounded when nothing was hit) meets a surface of `before` or `now`
+/// (the previous and this frame holding only the changed instances): the exact test
+/// behind the box test. The segment is that of the gather ray (same origin offset),
+/// lengthened by a relative 1e-4 so that a hit exactly at the old distance counts.
+fn segment_meets_geometry(
+    before: &FrameScene,
+    now: &FrameScene,
+    p: Vec3,
+    n: Vec3,
+    d: Vec3,
+    dist: f32,
+) -> bool {
+    let mut ray = spawn_ray(p, n, d);
+    ray.tmax = if dist.is_finite() {
+        dist * (1.0 + 1e-4) + 1e-6
+    } else {
+        f32::INFINITY
+    };
+    before.occluded(&ray) || now.occluded(&ray)
+}
+
 /// What a frame's refresh needs to know.
 struct Refresh<'a> {
     scene: &'a FrameScene,
@@ -544,6 +806,9 @@ struct Refresh<'a> {
     changed: &'a [bool],
     /// Boxes (previous and this frame) of the changed instances, slightly enlarged.
     boxes: &'a [Bounds3],
+    /// [`Change::exact`]: segments that meet a box are tested against the changed
+    /// geometry itself in both frames.
+    exact: Option<&'a (FrameScene, FrameScene)>,
     all_stale: bool,
     budget: usize,
 }
@@ -552,6 +817,8 @@ struct Refresh<'a> {
 struct Counts {
     priority: u64,
     aged: u64,
+    /// Segments that met a changed box but not the changed geometry (not re-cast).
+    box_only: u64,
 }
 
 impl Refresh<'_> {
@@ -567,6 +834,15 @@ impl Refresh<'_> {
                 || (!self.boxes.is_empty() && {
                     let (d, _) = stratum_dir(s, &fr, r.id, i, t.cast);
                     self.boxes.iter().any(|b| segment_meets(b, r.p, d, t.dist))
+                        && match self.exact {
+                            None => true,
+                            Some((before, now)) => {
+                                let meets =
+                                    segment_meets_geometry(before, now, r.p, r.n, d, t.dist);
+                                counts.box_only += u64::from(!meets);
+                                meets
+                            }
+                        }
                 });
             if prio {
                 recast[i] = true;
@@ -668,7 +944,11 @@ impl IcSelective {
         }
         let st = self.state.as_mut().expect("state made");
         // 1. What changed since the previous frame rendered, and where.
-        let change = st.change_to(scene, self.settings.recast_on_light_change);
+        let change = st.change_to(
+            scene,
+            self.settings.recast_on_light_change,
+            self.settings.exact_priority,
+        );
         let maps = frame_maps(scene, &s, photon_base(&s, frame));
         let t_photons = t0.elapsed().as_secs_f64();
         let before = st.records.len();
@@ -690,28 +970,45 @@ impl IcSelective {
             frame,
             changed: &change.changed,
             boxes: &change.boxes,
+            exact: change.exact.as_ref(),
             all_stale: change.all_stale,
             budget,
         };
         let (counts, mut t_store) = st.refresh(&mut records, &refresh, spr);
         let refreshed = records.len();
         // 5. New records where the view needs them (pm-ic's batches).
-        let (cache, added, t_add) = st.add_needed(&mut records, &points, &refresh, spr);
+        let (mut cache, added, t_add) = st.add_needed(&mut records, &points, &refresh, spr);
         t_store += t_add;
         let all_stale = change.all_stale;
-        st.records = records;
-        st.prev = scene_arc.clone();
         let t_cache = t0.elapsed().as_secs_f64() - t_photons;
 
-        let src = CacheSource {
-            settings: &s,
+        // 6. The eye pass.
+        let src = SelSource {
+            at: &refresh,
             cache: &cache,
-            global: &maps.global,
-            unstored: Default::default(),
+            used: (0..records.len()).map(|_| AtomicBool::new(false)).collect(),
+            misses: Mutex::new(Vec::new()),
+            gathers: AtomicU64::new(0),
+            buffered: AtomicUsize::new(0),
+            buffer_cap: self.settings.eye_buffer_mb as usize * (1 << 20),
+            keep: self.settings.store_eye_gathers,
         };
         let eye = EyeView::new(&s, scene, &maps.caustic, &src);
         let mut out = render_camera_rays(&eye, scene, frame, s.common.spp, s.common.seed, progress);
         out.stats.rays += maps.rays;
+        let SelSource {
+            used,
+            misses,
+            gathers: eye_gathers,
+            ..
+        } = src;
+        let eye_gathers = eye_gathers.into_inner();
+        // 7. The eye pass's gathers become records.
+        let misses = misses.into_inner().expect("no panic while held");
+        let (from_eye, t_eye) = st.add_from_eye(&mut records, &mut cache, used, misses, &refresh);
+        t_store += t_eye;
+        st.records = records;
+        st.prev = scene_arc.clone();
         let stats = st.store.stats();
         let r = &mut out.report;
         r.insert("photons".into(), s.photons.into());
@@ -722,12 +1019,14 @@ impl IcSelective {
         r.insert("records_refreshed".into(), refreshed.into());
         r.insert("strata_priority".into(), counts.priority.into());
         r.insert("strata_by_age".into(), counts.aged.into());
+        r.insert("strata_box_only".into(), counts.box_only.into());
         r.insert(
             "strata_cast".into(),
-            (counts.priority + counts.aged + added * spr as u64).into(),
+            (counts.priority + counts.aged + (added + eye_gathers) * spr as u64).into(),
         );
+        r.insert("records_from_eye".into(), from_eye.into());
         r.insert("lights_or_materials_changed".into(), all_stale.into());
-        r.insert("unstored_gathers".into(), src.unstored.into_inner().into());
+        r.insert("unstored_gathers".into(), eye_gathers.into());
         r.insert("seconds_photons".into(), t_photons.into());
         r.insert("seconds_cache".into(), t_cache.into());
         r.insert("seconds_store".into(), t_store.into());

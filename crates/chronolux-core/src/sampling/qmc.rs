@@ -34,22 +34,15 @@ pub fn radical_inverse(dim: usize, index: u64) -> f32 {
     ((rev as f64 * inv_n) as f32).min(super::rng::ONE_MINUS_EPSILON)
 }
 
-/// The digits of `index` in base `B` reversed (as an integer) and `B^-digits`.
+/// [`digits_dyn`] with the base a constant, so that inlined its divisions are by a
+/// constant.
 #[inline(always)]
-fn digits<const B: u64>(mut index: u64) -> (u64, f64) {
-    let inv = 1.0 / B as f64;
-    let mut inv_n = 1.0f64;
-    let mut rev = 0u64;
-    while index > 0 {
-        let next = index / B;
-        rev = rev * B + (index - next * B);
-        inv_n *= inv;
-        index = next;
-    }
-    (rev, inv_n)
+fn digits<const B: u64>(index: u64) -> (u64, f64) {
+    digits_dyn(B, index)
 }
 
-/// [`digits`] with the base known at run time only.
+/// The digits of `index` in base `base` reversed (as an integer) and `base^-digits`.
+#[inline(always)]
 fn digits_dyn(base: u64, mut index: u64) -> (u64, f64) {
     let inv = 1.0 / base as f64;
     let mut inv_n = 1.0f64;

@@ -75,6 +75,24 @@ pub struct EyePath {
     pub length: f32,
 }
 
+impl EyePath {
+    /// The environment's radiance along this escaped path's ray when it was reached through
+    /// delta bounces only (no non-delta vertex before): the backdrop for the camera ray
+    /// itself (as in `dept`'s view), the environment's radiance behind mirrors and glass,
+    /// times the throughput. `None` without an environment or after a non-delta vertex.
+    pub fn environment_seen(&self, scene: &FrameScene) -> Option<Rgb> {
+        let env = scene.environment.as_ref().filter(|_| self.scattered == 0)?;
+        Some(
+            self.beta
+                * if self.bounce == 0 {
+                    env.seen_by_camera(self.ray.d)
+                } else {
+                    env.radiance(self.ray.d)
+                },
+        )
+    }
+}
+
 /// A surface vertex of an eye path.
 pub struct EyeVertex<'a> {
     pub hit: &'a Hit,

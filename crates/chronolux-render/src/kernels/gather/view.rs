@@ -129,16 +129,9 @@ struct GatherReader<'v, 'q, S: IndirectSource> {
 impl<S: IndirectSource> EyeReader for GatherReader<'_, '_, S> {
     fn escaped(&mut self, scene: &FrameScene, path: &EyePath, _: &mut Stats) {
         if self.probe.is_none()
-            && path.scattered == 0
-            && let Some(env) = &scene.environment
+            && let Some(l) = path.environment_seen(scene)
         {
-            // The camera ray itself shows the backdrop (as in `dept`'s view).
-            self.l += path.beta
-                * if path.bounce == 0 {
-                    env.seen_by_camera(path.ray.d)
-                } else {
-                    env.radiance(path.ray.d)
-                };
+            self.l += l;
         }
     }
 

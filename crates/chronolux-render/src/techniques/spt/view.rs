@@ -106,16 +106,8 @@ struct SptReader<'v> {
 impl EyeReader for SptReader<'_> {
     fn escaped(&mut self, scene: &FrameScene, path: &EyePath, _: &mut Stats) {
         // Emission counts seen through delta bounces only.
-        if path.scattered == 0
-            && let Some(env) = &scene.environment
-        {
-            // The camera ray itself shows the backdrop (as in `dept`'s view).
-            self.l += path.beta
-                * if path.bounce == 0 {
-                    env.seen_by_camera(path.ray.d)
-                } else {
-                    env.radiance(path.ray.d)
-                };
+        if let Some(l) = path.environment_seen(scene) {
+            self.l += l;
         }
     }
 

@@ -14,7 +14,8 @@ pub struct SceneArgs {
     /// box: a sliding, turning block, a metal sphere and a glass sphere; 2 s).
     /// `builtin:demo`, `builtin:caustic` (a glass sphere's caustic, and an occluder that
     /// enters abruptly between frames 3 and 4), `builtin:dolly` (the demo filmed by a
-    /// camera that trucks, dollies in and turns) and `builtin:banner` (a skinned banner
+    /// camera that trucks, dollies in and turns), `builtin:flythrough` (the dolly's camera
+    /// path through the demo's room with nothing else moving) and `builtin:banner` (a skinned banner
     /// whose lower half swings while its upper half stays still) name the built-in scenes.
     pub scene: Option<PathBuf>,
     /// Animation clip to play, by name or index (default: the first clip).

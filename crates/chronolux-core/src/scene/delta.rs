@@ -366,6 +366,17 @@ impl FrameDelta {
         self.bounds
     }
 
+    /// Nothing but the camera changed: every instance, light, material and the bounds are
+    /// the same in both frames, so all view-independent light (photons, element and cache
+    /// solutions) is too. A fly-through of a still set is a run of such frames.
+    pub fn only_camera_changed(&self) -> bool {
+        !(self.moved.iter().any(|&c| c)
+            || self.deformed.iter().any(|&c| c)
+            || self.lights_changed()
+            || self.materials_changed()
+            || self.bounds)
+    }
+
     /// Nothing changed: every instance, light, material, the camera and the bounds are the
     /// same in both frames.
     pub fn is_static(&self) -> bool {

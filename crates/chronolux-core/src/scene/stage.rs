@@ -588,6 +588,26 @@ pub fn dolly() -> SceneDesc {
     d
 }
 
+/// A fly-through of a still interior: the [`dolly`]'s camera path through the demo's room,
+/// with nothing else moving (the cube stays at its first pose). Every frame sees the room
+/// from a new place while all its light stays the same: the case an irradiance-map
+/// fly-through mode (V-Ray) or an ambient file (Radiance) serves by computing the light
+/// once. One clip named `"flythrough"` lasting [`DEMO_DURATION`].
+pub fn flythrough() -> SceneDesc {
+    let mut d = dolly();
+    d.name = "flythrough".into();
+    let cam = d
+        .nodes
+        .iter()
+        .position(|n| n.camera == Some(CameraId(0)))
+        .map(|i| NodeId(i as u32))
+        .expect("the stage camera's node");
+    let clip = &mut d.animations[0];
+    clip.name = "flythrough".into();
+    clip.channels.retain(|c| c.node == cam);
+    d
+}
+
 /// Quads across and down the [`banner`]; the upper half of the rows is still.
 pub const BANNER_COLUMNS: u32 = 8;
 pub const BANNER_ROWS: u32 = 12;
@@ -691,14 +711,15 @@ pub fn banner() -> SceneDesc {
 }
 
 /// Names of the built-in scenes ([`builtin`]).
-pub const BUILTIN_SCENES: [&str; 4] = ["demo", "caustic", "dolly", "banner"];
+pub const BUILTIN_SCENES: [&str; 5] = ["demo", "caustic", "dolly", "flythrough", "banner"];
 
-/// A built-in scene by name (`demo`, `caustic`, `dolly`, `banner`).
+/// A built-in scene by name (`demo`, `caustic`, `dolly`, `flythrough`, `banner`).
 pub fn builtin(name: &str) -> Option<SceneDesc> {
     match name {
         "demo" => Some(demo()),
         "caustic" => Some(caustic()),
         "dolly" => Some(dolly()),
+        "flythrough" => Some(flythrough()),
         "banner" => Some(banner()),
         _ => None,
     }
@@ -903,6 +924,25 @@ mod tests {
                 let w = pose.world[cube].transform_point3(p);
                 assert!(w.x.abs() <= 1.0 && w.z.abs() <= 1.0 && w.y >= -1e-5, "{w}");
             }
+        }
+    }
+
+    #[test]
+    fn flythrough_moves_only_the_camera() {
+        let d = flythrough();
+        assert_eq!(d.animations[0].name, "flythrough");
+        assert_eq!(d.animations[0].duration(), DEMO_DURATION);
+        let cam = d.nodes.iter().position(|n| n.camera.is_some()).unwrap();
+        let clip = &d.animations[0];
+        assert!(!clip.channels.is_empty());
+        assert!(clip.channels.iter().all(|c| c.node.index() == cam));
+        // The camera's path is the dolly's.
+        let dolly = dolly();
+        for f in [0, 17, 48] {
+            let t = f as f32 / 24.0;
+            let a = pose_at(&d, Some(AnimationId(0)), t).world[cam];
+            let b = pose_at(&dolly, Some(AnimationId(0)), t).world[cam];
+            assert!(a.abs_diff_eq(b, 1e-6), "frame {f}");
         }
     }
 

@@ -77,6 +77,27 @@
 //! room, the demo, its dolly and cornell-moving stay `spacetime-dept` (ratios 2.8–33 at
 //! 96²).
 //! `path_probe = false` turns the probe off.
+//!
+//! ## Still sets: the light computed once
+//! Where only the camera moves (a fly-through of a still interior, or nothing moves at all),
+//! every frame of a window has the same photons' worth of light, so sliding the window
+//! (tracing each frame's own `N` photons and pooling `2K + 1` frames) spends `N` photons per
+//! frame to keep a solution that never changes. When every frame of the output frame's
+//! window shows the same set — between consecutive frames of the window only the camera
+//! differs ([`FrameDelta::only_camera_changed`], from the animation, never from pixels) —
+//! the frame reads a **still solution** instead: the photons `0 .. (2K + 1)·N` (the whole
+//! window's budget, the count the automatic element size assumes) traced once in the set,
+//! completed by the bilateral filter once, and kept for every later output frame whose
+//! window shows the same set. Its estimate has the sliding window's photons with equal
+//! weights (at least the Gaussian-weighted window's effective count), so quality is not
+//! lower; the indirect light does not flicker at all within the set, and a fly-through of
+//! `L` frames traces `(2K + 1)·N` photons instead of `L·N` and filters once instead of `L`
+//! times. It depends only on the set (not on where the render list or a farm segment
+//! starts), so a segment renders a frame as a single run does. Off with
+//! `still_set = false`, with the `auto` stopping rule (per-frame counts), and for a
+//! single-frame render (a window of one frame: the solution would cost `2K + 1` frames'
+//! photons for one). A frame whose window reaches a change (the first and last `K` frames
+//! of a still stretch inside a moving animation) slides as before.
 
 use crate::framework::integrator::{LightSplit, RenderedFrame, render_camera_rays};
 use crate::framework::sequence::SequenceRenderer;
@@ -96,6 +117,7 @@ use crate::kernels::elements::view::DeptView;
 use crate::kernels::probe::{Probe, path_tracer, probe, probe_frame};
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::parallel;
+use chronolux_core::scene::delta::FrameDelta;
 use chronolux_core::scene::frame::FrameScene;
 use chronolux_core::scene::source::FrameSource;
 use std::sync::Arc;
@@ -181,6 +203,10 @@ pub struct SpacetimeSettings {
     /// [`crate::kernels::probe`]), and says so in the frame's `path_probe` report.
     /// Default true.
     pub path_probe: bool,
+    /// Where only the camera moves, frames whose whole window shows the same set read one
+    /// solution of `(2K + 1)·photons` photons traced and filtered once (module
+    /// documentation, "Still sets"). Default true.
+    pub still_set: bool,
 }
 
 impl Default for SpacetimeSettings {
@@ -208,6 +234,7 @@ impl Default for SpacetimeSettings {
             kappa: 2.0,
             min_photons: 8,
             path_probe: true,
+            still_set: true,
         }
     }
 }
@@ -456,6 +483,16 @@ pub struct SpacetimeFrameInfo {
     pub area: Vec<f32>,
 }
 
+/// The solution of a still set (module documentation, "Still sets"): the element sums of
+/// the whole window's photons, traced once, and their completion.
+struct StillSolution {
+    /// The scene of the frame that traced it (any frame of the set).
+    scene: Arc<FrameScene>,
+    photons: u64,
+    indirect: Vec<Rgb>,
+    caustic: Vec<Rgb>,
+}
+
 /// The `spacetime-dept` sequence renderer.
 pub struct SpacetimeDept {
     pub settings: SpacetimeSettings,
@@ -475,6 +512,8 @@ pub struct SpacetimeDept {
     nb_output: NeighbourCache,
     /// The last path probe ([`crate::kernels::probe`]).
     probe: Option<Probe>,
+    /// The current still set's solution, if any.
+    still: Option<StillSolution>,
 }
 
 impl SpacetimeDept {
@@ -491,7 +530,88 @@ impl SpacetimeDept {
             nb_direct: NeighbourCache::default(),
             nb_output: NeighbourCache::default(),
             probe: None,
+            still: None,
         }
+    }
+
+    /// Whether every frame of `frame`'s window shows `frame`'s set (only the camera
+    /// differs between consecutive frames of the window), so that the frame reads the
+    /// still solution (module documentation, "Still sets").
+    fn window_is_still(&self, source: &mut FrameSource, frame: u32) -> bool {
+        let s = &self.settings;
+        if !s.still_set || s.auto.is_some() {
+            return false;
+        }
+        let window = source.window(frame, s.window, s.window);
+        if window.len() < 2 {
+            return false;
+        }
+        let mut prev = source.frame(window[0]);
+        for &g in &window[1..] {
+            let next = source.frame(g);
+            if !FrameDelta::between(&prev, &next).only_camera_changed() {
+                return false;
+            }
+            prev = next;
+        }
+        true
+    }
+
+    /// The still solution for `scene` (kept, or traced and completed now): indirect and
+    /// caustic irradiance per element side, the photons, and the photon rays traced for it
+    /// in this frame (0 when kept).
+    fn still_solution(
+        &mut self,
+        scene: &Arc<FrameScene>,
+        mesh: &ElementMesh,
+        fe: &FrameElements,
+        nb: &Neighbours,
+    ) -> (Vec<Rgb>, Vec<Rgb>, u64, u64) {
+        if let Some(st) = &self.still
+            && FrameDelta::between(&st.scene, scene).only_camera_changed()
+        {
+            return (st.indirect.clone(), st.caustic.clone(), st.photons, 0);
+        }
+        let s = &self.settings;
+        let n = s.photons * (2 * s.window as u64 + 1);
+        let mut ph = FramePhotons::new(mesh.element_count());
+        deposit_more_photons(
+            scene,
+            mesh,
+            0..n,
+            s.common.seed,
+            max_photon_bounces(s.common.max_depth),
+            &mut ph,
+        );
+        let rays = ph.stats.rays;
+        let total = ph.photons();
+        // The sums of `pool` for a window of one frame (weight 1).
+        let pooled = |acc: &ElementAccumulators| -> Vec<Pooled> {
+            (0..acc.flux.len())
+                .map(|k| {
+                    let a = fe.area[k / 2];
+                    if a <= 0.0 {
+                        return Pooled::default();
+                    }
+                    Pooled {
+                        flux: acc.flux[k],
+                        na: total as f32 * a,
+                        sq: acc.flux_sq[k],
+                        count: acc.count[k],
+                    }
+                })
+                .collect()
+        };
+        let (pi, pc) = (pooled(&ph.indirect), pooled(&ph.caustic));
+        let (ind, _) = self.complete(&pi, nb, prior_sq(&ph.indirect));
+        let (cau, _) = self.complete(&pc, nb, prior_sq(&ph.caustic));
+        self.still = Some(StillSolution {
+            scene: scene.clone(),
+            photons: total,
+            indirect: ind.clone(),
+            caustic: cau.clone(),
+        });
+        (ind, cau, total, rays)
     }
 
     /// First photon index of frame `g` and the photons a frame gets when it is first
@@ -785,11 +905,13 @@ impl SpacetimeDept {
             );
             self.mesh = Some(mesh);
             self.frames.clear();
+            self.still = None;
         }
         // Frames must arrive in increasing order; a jump back restarts.
         if self.last_output.is_some_and(|l| l >= frame) {
             self.frames.clear();
             self.history.clear();
+            self.still = None;
             // The scene may have been edited (the live view renders a frame again).
             self.probe = None;
         }
@@ -909,26 +1031,43 @@ impl SequenceRenderer for SpacetimeDept {
         // Wall-clock phases for `RUST_LOG=chronolux_render=debug` (a profile, not a
         // benchmark: see BENCHMARKS.md for CPU seconds).
         let t0 = std::time::Instant::now();
-        self.trace_window(source, frame, &scene_arc);
+        let still = self.window_is_still(source, frame);
+        if still {
+            // The sliding frames are not needed while the window shows the still set.
+            let w = source.window(frame, s.window, s.window);
+            self.frames.retain(|t| w.contains(&t.frame));
+        } else {
+            self.trace_window(source, frame, &scene_arc);
+        }
         let t_trace = t0.elapsed();
         let mesh = self.mesh.take().expect("mesh");
         let fe = FrameElements::new(scene, &mesh);
-        let c = self
-            .frames
-            .iter()
-            .position(|t| t.frame == frame)
-            .expect("output frame traced");
         let t0 = std::time::Instant::now();
         let mut nb_output = std::mem::take(&mut self.nb_output);
         let nb = nb_output.get(&fe, self.output_radius(&mesh));
-        let (ind, cau, window) = self.solve_elements(scene, frame, &mesh, &fe, c, nb);
+        let (ind, cau, window, photon_rays, still_report) = if still {
+            let (ind, cau, photons, rays) = self.still_solution(&scene_arc, &mesh, &fe, nb);
+            self.last_photons = Some(photons);
+            let w = source.window(frame, s.window, s.window);
+            let whole = (w[0], *w.last().expect("frame in its window"));
+            let report = serde_json::json!({ "photons": photons, "traced_here": rays > 0 });
+            (ind, cau, vec![whole; fe.area.len() * 2], rays, Some(report))
+        } else {
+            self.still = None;
+            let c = self
+                .frames
+                .iter()
+                .position(|t| t.frame == frame)
+                .expect("output frame traced");
+            let (ind, cau, window) = self.solve_elements(scene, frame, &mesh, &fe, c, nb);
+            let cur = &self.frames[c];
+            self.last_photons = Some(cur.photons.photons());
+            (ind, cau, window, cur.photons.stats.rays, None)
+        };
         self.nb_output = nb_output;
         if log::log_enabled!(log::Level::Debug) {
             log_windows(source, frame, s.window, &fe, &ind, &cau, &window);
         }
-        let cur = &self.frames[c];
-        self.last_photons = Some(cur.photons.photons());
-        let photon_rays = cur.photons.stats.rays;
         self.info = Some(SpacetimeFrameInfo {
             frame,
             window,
@@ -1009,6 +1148,9 @@ impl SequenceRenderer for SpacetimeDept {
         img.report.insert("light_spp".into(), mean_pooled.into());
         if let Some(p) = probed {
             img.report.insert("path_probe".into(), p);
+        }
+        if let Some(r) = still_report {
+            img.report.insert("still_set".into(), r);
         }
         img.report.insert(
             "elements_per_diagonal".into(),

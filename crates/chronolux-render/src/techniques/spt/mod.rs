@@ -66,12 +66,14 @@
 //!   removal of its flagged photons; for a photon, the removal of its stored path), or
 //!   in `random` order (the paper's baseline), or `scratch`: every change empties the
 //!   solution and the pool is shot again from photon 0 (recomputation from scratch with
-//!   the same photons). Measured (`chronolux bench update`, BENCHMARKS.md Issue 11): on a
-//!   localized edit priority and random order re-shoot the same exactly-flagged photons,
-//!   and the visible difference lies on sides that most of them touch, so the order gains
-//!   little (1.1–1.4×); the gain over scratch is the flagged fraction, less the fixed
-//!   cost of the scan (≈ 9 ms of 16 ms per update at 300k photons, one thread) and the
-//!   coverage grid.
+//!   the same photons). Measured (`chronolux bench update`, BENCHMARKS.md Issue 11, 300k
+//!   photons, one thread): on a localized edit (`--change nudge`) priority and random
+//!   order re-shoot the same exactly-flagged photons (11.1k), and the visible difference
+//!   lies on sides most of them touch (no visible difference after 86 % of them in
+//!   priority order, 99 % in random order), so the order gains little (0.84–1.34× CPU);
+//!   the gain over scratch is the flagged fraction (31× fewer photons) less a fixed
+//!   ≈ 20 ms per update (the scan of the stored paths, the coverage grid, the keys) and a
+//!   re-shot photon's extra cost (removal of its old deposits): 7.9–9.1× CPU.
 //! - **Animation**: frame `f + 1` updates frame `f`'s state with the changes between the
 //!   two frames, within a per-frame budget (`budget_fraction` of `Z` photons, and/or
 //!   `budget_ms`); leftover groups stay queued for the next frame (`groups_queued` in the

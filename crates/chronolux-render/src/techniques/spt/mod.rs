@@ -28,8 +28,9 @@
 //!   made and adds the new ones, in `f64`, so re-shooting in an unchanged scene returns
 //!   the solution to itself up to rounding, and counters and `Σφ²` (the noise estimate)
 //!   always describe the photons currently in the solution.
-//! - **Pilots**: members `0 .. p` of every group, `p = max(1, round(pilot_fraction ·
-//!   Z/N_g))` (default 7 %), are re-traced after every change. A pilot invalidates its
+//! - **Pilots** (the paper's detector; traced when `scan_paths = false`, or with
+//!   `trace_pilots = true`): members `0 .. p` of every group, `p = max(1,
+//!   round(pilot_fraction · Z/N_g))` (default 7 %), are re-traced after every change. A pilot invalidates its
 //!   group when its stored (old) or new path touches an instance, light or material that
 //!   changed ([`FrameDelta`](chronolux_core::scene::delta::FrameDelta)), or when the two
 //!   paths differ (light, vertex count, instance, material, triangle, element side, kind,
@@ -47,12 +48,32 @@
 //!   complete (miss rate 0, tested) and conservative (a segment may cross a box and miss
 //!   what is in it). With it, `reshoot = flagged` (default) re-shoots only the flagged
 //!   photons of a queued group instead of all of them (`reshoot = group`, the paper).
-//! - **Order** ([`Order`]): queued groups are re-shot one after the other, `priority`
-//!   first by the perceptual change their pilots saw (Σ over changed element sides of
-//!   the Weber contrast of the deposit change against the side's total flux, weighted by
-//!   the side's screen coverage, `SptState::perceived_change`), or in `random` order (the
-//!   paper's baseline), or `scratch`: every change empties the solution and the pool is
-//!   shot again from photon 0 (recomputation from scratch with the same photons).
+//! - **No pilots, single photons** (defaults `trace_pilots = false`, `reshoot =
+//!   photon`; not in the paper): with a complete scan the pilots detect nothing the scan
+//!   has not found, and they were half of the photons of an update (block jump: 23.1k of
+//!   47.0k, capping the CPU speedup over scratch at half the photon speedup). So the scan
+//!   alone both finds and ranks: each flagged photon enters the queue by itself, keyed by
+//!   the perceived change of removing its stored path (below), and is re-shot when its
+//!   turn comes — the unit of re-shooting is the photon, not the Eq.-1 group, whose
+//!   members are too incoherent to share a fate (item 2 of BENCHMARKS.md's Issue 11: 8 %
+//!   of the photons change, in 80 % of the groups). The final pool is the same with or
+//!   without pilots, groups or photons (every record equals its fresh trace: tested).
+//! - **Order** ([`Order`]): queued groups (or photons) are re-shot one after the other,
+//!   `priority` first by their perceptual change (Σ over the element sides of a path's
+//!   indirect and caustic deposits of the Weber contrast of the deposit against the
+//!   side's total flux, weighted by the side's screen coverage,
+//!   `SptState::perceived_change`: for a group, what its pilots saw change plus the
+//!   removal of its flagged photons; for a photon, the removal of its stored path), or
+//!   in `random` order (the paper's baseline), or `scratch`: every change empties the
+//!   solution and the pool is shot again from photon 0 (recomputation from scratch with
+//!   the same photons). Measured (`chronolux bench update`, BENCHMARKS.md Issue 11, 300k
+//!   photons, one thread): on a localized edit (`--change nudge`) priority and random
+//!   order re-shoot the same exactly-flagged photons (11.1k), and the visible difference
+//!   lies on sides most of them touch (no visible difference after 86 % of them in
+//!   priority order, 99 % in random order), so the order gains little (0.84–1.34× CPU);
+//!   the gain over scratch is the flagged fraction (31× fewer photons) less a fixed
+//!   ≈ 20 ms per update (the scan of the stored paths, the coverage grid, the keys) and a
+//!   re-shot photon's extra cost (removal of its old deposits): 7.9–9.1× CPU.
 //! - **Animation**: frame `f + 1` updates frame `f`'s state with the changes between the
 //!   two frames, within a per-frame budget (`budget_fraction` of `Z` photons, and/or
 //!   `budget_ms`); leftover groups stay queued for the next frame (`groups_queued` in the
@@ -75,7 +96,7 @@
 //!   weighted by screen coverage and taken as a Weber contrast (masking by bright
 //!   surroundings, as in Myszkowski's perception-guided rendering).
 //! - Pilots are a fixed prefix of each group rather than a random subset.
-//! - The path scan and per-photon re-shooting above (both settings; `--set
+//! - The path scan, per-photon re-shooting and no pilots above (settings; `--set
 //!   scan_paths=false --set reshoot=group` is the paper's detector and granularity).
 
 pub mod groups;
@@ -111,6 +132,11 @@ pub enum Reshoot {
     /// Only the photons the path scan flagged (exact when `scan_paths` is on, which makes
     /// the flags complete; with `scan_paths = false` whole groups are re-shot).
     Flagged,
+    /// The flagged photons one by one, each in its own place in the order (its own
+    /// perceived change, or its own random key): the queue holds photons, not groups.
+    /// Needs `scan_paths` (else whole groups are re-shot); `scratch` order re-shoots
+    /// groups whatever this says.
+    Photon,
 }
 
 /// Settings of `spt`.
@@ -140,9 +166,15 @@ pub struct SptSettings {
     /// path touched a change or crosses the new bounds of a changed instance (complete:
     /// no stale group is missed). `false`: pilots only, as in the paper. Default true.
     pub scan_paths: bool,
-    /// What a queued group's re-shooting traces: `flagged` (only the photons the path
-    /// scan flagged) or `group` (all of them, as in the paper). Default `flagged`.
+    /// What is re-shot: `photon` (the flagged photons, each queued by itself), `flagged`
+    /// (a queued group's flagged photons) or `group` (all of a queued group's photons,
+    /// as in the paper). Default `photon`.
     pub reshoot: Reshoot,
+    /// Trace the pilots also when the path scan is on (it finds every stale photon
+    /// without them; the pilots then only add their observed change to the priority of
+    /// their groups). With `scan_paths = false` the pilots are the detector and are
+    /// always traced. Default false.
+    pub trace_pilots: bool,
     /// Relative power difference at which a pilot's path counts as changed. Default 1e-4.
     pub path_tolerance: f32,
     /// Re-trace the whole pool after each update to count the pilots' misses (costly;
@@ -178,7 +210,8 @@ impl Default for SptSettings {
             budget_fraction: 0.25,
             budget_ms: 0.0,
             scan_paths: true,
-            reshoot: Reshoot::Flagged,
+            reshoot: Reshoot::Photon,
+            trace_pilots: false,
             path_tolerance: 1e-4,
             audit: false,
             elements: 0.0,
@@ -198,6 +231,18 @@ impl SptSettings {
             self.elements,
             self.photons as f64,
         )
+    }
+
+    /// Whether an update traces the pilots: always without the path scan (they are the
+    /// detector), with it only when `trace_pilots` asks.
+    pub fn uses_pilots(&self) -> bool {
+        !self.scan_paths || self.trace_pilots
+    }
+
+    /// Whether the queue holds single photons (`reshoot = photon` with the path scan, in
+    /// an order other than `scratch`) rather than groups.
+    pub fn per_photon(&self) -> bool {
+        self.scan_paths && self.reshoot == Reshoot::Photon && self.order != Order::Scratch
     }
 
     /// The per-frame budget of these settings for a pool of `z` photons.

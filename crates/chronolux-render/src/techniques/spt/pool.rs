@@ -388,15 +388,23 @@ pub struct SptState {
     photons_in_solution: u64,
     /// Pilots per group (members `0 .. pilots` of each group).
     pub pilots: u64,
-    /// Per photon: the path scan found its stored path possibly stale.
+    /// Per photon: the path scan found its stored path possibly stale (with
+    /// [`SptSettings::per_photon`]: the photon is in the queue).
     flagged: Vec<bool>,
+    /// Per photon, with [`SptSettings::per_photon`]: its order key (larger first).
+    pkey: Vec<f64>,
+    /// Per group, with [`SptSettings::per_photon`]: its photons in the queue.
+    pending: Vec<u32>,
+    /// Groups with a photon in the queue, with [`SptSettings::per_photon`].
+    queued_groups: u64,
     /// Whether the pilots are current (traced in the current scene); false after a
     /// scratch restart.
     pilots_current: bool,
     queued: Vec<bool>,
     /// Order key of each group (larger first).
     key: Vec<f64>,
-    /// Queued groups sorted by ascending key (the next one is last).
+    /// Queued groups (with [`SptSettings::per_photon`]: queued photons) sorted by
+    /// ascending key (the next one is last).
     queue: Vec<u32>,
     /// Number of updates made (varies the random order between changes).
     epoch: u64,
@@ -446,6 +454,9 @@ impl SptState {
             photons_in_solution: n,
             pilots,
             flagged: vec![false; n as usize],
+            pkey: Vec::new(),
+            pending: vec![0; g],
+            queued_groups: 0,
             pilots_current: true,
             queued: vec![false; g],
             key: vec![0.0; g],
@@ -453,7 +464,10 @@ impl SptState {
             epoch: 0,
             coverage,
         };
-        s.coverage = s.screen_coverage();
+        if s.settings.per_photon() {
+            s.pkey = vec![0.0; n as usize];
+        }
+        s.coverage = screen_coverage(&s.scene, &s.mesh, COVERAGE_GRID);
         s
     }
 
@@ -462,9 +476,38 @@ impl SptState {
         &self.scene
     }
 
-    /// Groups waiting to be re-shot.
+    /// Groups waiting to be re-shot (with [`SptSettings::per_photon`]: groups with a
+    /// photon waiting).
     pub fn queue_len(&self) -> usize {
-        self.queue.len()
+        if self.settings.per_photon() {
+            self.queued_groups as usize
+        } else {
+            self.queue.len()
+        }
+    }
+
+    /// Photons waiting to be re-shot: the queued photons with
+    /// [`SptSettings::per_photon`], else the members of the queued groups that their
+    /// re-shooting will trace.
+    pub fn queued_photons(&self) -> u64 {
+        if self.settings.per_photon() {
+            return self.queue.len() as u64;
+        }
+        let only_flagged =
+            self.settings.scan_paths && self.settings.reshoot == super::Reshoot::Flagged;
+        let skip = if self.pilots_current { self.pilots } else { 0 };
+        let n = self.layout.groups;
+        self.queue
+            .iter()
+            .map(|&g| {
+                (skip..self.layout.members)
+                    .filter(|&m| {
+                        let i = g as u64 + m * n;
+                        !only_flagged || !self.in_solution[g as usize] || self.flagged[i as usize]
+                    })
+                    .count() as u64
+            })
+            .sum()
     }
 
     /// Photons currently in the solution.
@@ -509,7 +552,7 @@ impl SptState {
             .any(|l| scene.light_sampler.pmf(l) != self.scene.light_sampler.pmf(l));
         self.scene = scene;
         self.epoch += 1;
-        self.coverage = self.screen_coverage();
+        self.coverage = screen_coverage(&self.scene, &self.mesh, COVERAGE_GRID);
         let mut st = UpdateStats::default();
         let groups = self.layout.groups;
         if self.settings.order == Order::Scratch {
@@ -525,44 +568,51 @@ impl SptState {
             }
             st.groups_invalidated = groups;
         } else if !changes.is_static() {
-            let pilots: Vec<u64> = (0..groups)
-                .flat_map(|g| (0..self.pilots).map(move |m| (g, m)))
-                .map(|(g, m)| self.layout.photon(g, m))
-                .collect();
-            let (new, ps) =
-                trace_records(&self.scene, &self.mesh, &pilots, self.settings.common.seed);
-            st.pilots_traced = pilots.len() as u64;
-            st.photons_traced += pilots.len() as u64;
-            st.rays += ps.rays;
             let tol = self.settings.path_tolerance;
             let mut change = vec![0.0f64; groups as usize];
             let phi0 = self.flux_floor();
             let mut invalid = vec![false; groups as usize];
-            for (&i, rec) in pilots.iter().zip(new) {
-                let g = self.layout.group_of(i) as usize;
-                let old = &self.records[i as usize];
-                let differs = old.differs(&rec, tol);
-                if differs
-                    || old.touches(changes, selection_changed)
-                    || rec.touches(changes, selection_changed)
-                {
-                    invalid[g] = true;
-                }
-                if differs {
-                    change[g] += self.perceived_change(old, &rec, phi0);
-                }
-                if *old != rec {
-                    // The pilot itself is brought up to date at once (also when it differs
-                    // by less than the tolerance: the pool stays exactly current).
-                    if self.in_solution[g] {
-                        self.solution.apply(old, -1.0);
-                        self.solution.apply(&rec, 1.0);
+            let use_pilots = self.settings.uses_pilots();
+            if use_pilots {
+                let pilots: Vec<u64> = (0..groups)
+                    .flat_map(|g| (0..self.pilots).map(move |m| (g, m)))
+                    .map(|(g, m)| self.layout.photon(g, m))
+                    .collect();
+                let (new, ps) =
+                    trace_records(&self.scene, &self.mesh, &pilots, self.settings.common.seed);
+                st.pilots_traced = pilots.len() as u64;
+                st.photons_traced += pilots.len() as u64;
+                st.rays += ps.rays;
+                for (&i, rec) in pilots.iter().zip(new) {
+                    let g = self.layout.group_of(i) as usize;
+                    let old = &self.records[i as usize];
+                    let differs = old.differs(&rec, tol);
+                    if differs
+                        || old.touches(changes, selection_changed)
+                        || rec.touches(changes, selection_changed)
+                    {
+                        invalid[g] = true;
                     }
-                    self.records[i as usize] = rec;
+                    if differs {
+                        change[g] += self.perceived_change(old, &rec, phi0);
+                    }
+                    if *old != rec {
+                        // The pilot itself is brought up to date at once (also when it differs
+                        // by less than the tolerance: the pool stays exactly current).
+                        if self.in_solution[g] {
+                            self.solution.apply(old, -1.0);
+                            self.solution.apply(&rec, 1.0);
+                        }
+                        self.records[i as usize] = rec;
+                    }
                 }
+                self.pilots_current = true;
+                st.groups_by_pilots = invalid.iter().filter(|&&b| b).count() as u64;
+            } else {
+                // No pilots: they are re-shot like any other photon (the scan covers them).
+                self.pilots_current = false;
             }
-            self.pilots_current = true;
-            st.groups_by_pilots = invalid.iter().filter(|&&b| b).count() as u64;
+            let per_photon = self.settings.per_photon();
             if self.settings.scan_paths {
                 // Every stored path that touched a change, or whose segments cross the
                 // new bounds of a changed instance, is (possibly) stale: its group goes
@@ -570,8 +620,12 @@ impl SptState {
                 // `changes` is from the pool's previous scene to `self.scene` (frame 1).
                 let boxes = changes.changed_bounds_in(1);
                 let z = self.records.len();
-                // Pilots are current already (traced above).
-                let first_non_pilot = (self.pilots * groups) as usize;
+                // Pilots are current already when traced above.
+                let first_non_pilot = if use_pilots {
+                    (self.pilots * groups) as usize
+                } else {
+                    0
+                };
                 let hits = parallel::map_chunks(z, 4096, |r| {
                     r.filter(|&i| {
                         let rec = &self.records[i];
@@ -582,13 +636,22 @@ impl SptState {
                 });
                 let empty = PhotonRecord::default();
                 for i in hits.into_iter().flatten() {
-                    self.flagged[i] = true;
                     let g = i % groups as usize;
                     if !invalid[g] {
                         invalid[g] = true;
                         st.groups_by_scan += 1;
                     }
-                    change[g] += self.perceived_change(&self.records[i], &empty, phi0);
+                    let c = self.perceived_change(&self.records[i], &empty, phi0);
+                    if per_photon {
+                        let k = match self.settings.order {
+                            Order::Random => self.random_key(i as u64, 0x0050_4854),
+                            _ => c + 1e-30,
+                        };
+                        self.enqueue_photon(i, k);
+                    } else {
+                        self.flagged[i] = true;
+                    }
+                    change[g] += c;
                 }
             }
             for g in 0..groups as usize {
@@ -596,6 +659,10 @@ impl SptState {
                     continue;
                 }
                 st.groups_invalidated += 1;
+                if per_photon {
+                    // Queued photon by photon above.
+                    continue;
+                }
                 let k = match self.settings.order {
                     Order::Random => {
                         (hash_words(&[
@@ -623,6 +690,30 @@ impl SptState {
         st.groups_queued = self.queue.len() as u64;
         st.seconds = t0.elapsed().as_secs_f64();
         st
+    }
+
+    /// A random order key for photon or group `i` in this epoch (`tag` tells the uses apart).
+    fn random_key(&self, i: u64, tag: u64) -> f64 {
+        (hash_words(&[self.settings.common.seed, self.epoch, i, tag]) >> 11) as f64
+    }
+
+    /// Puts photon `i` in the queue with key `k` ([`SptSettings::per_photon`]); one already
+    /// there keeps its random key, or adds `k` to its priority.
+    fn enqueue_photon(&mut self, i: usize, k: f64) {
+        if self.flagged[i] {
+            if self.settings.order != Order::Random {
+                self.pkey[i] += k;
+            }
+            return;
+        }
+        self.flagged[i] = true;
+        self.pkey[i] = k;
+        let g = i % self.layout.groups as usize;
+        self.pending[g] += 1;
+        if self.pending[g] == 1 {
+            self.queued[g] = true;
+            self.queued_groups += 1;
+        }
     }
 
     /// Perceptual size of the change from path `old` to `new`: over the element sides
@@ -665,6 +756,24 @@ impl SptState {
     /// with a fresh random key in random order) whatever their pilots say: for a caller
     /// that knows better (a viewer's "refresh", tests).
     pub fn requeue(&mut self, groups: impl IntoIterator<Item = u64>) {
+        if self.settings.per_photon() {
+            for g in groups {
+                for m in 0..self.layout.members {
+                    let i = self.layout.photon(g, m);
+                    let k = match self.settings.order {
+                        Order::Random => self.random_key(i, 0x0052_4551),
+                        _ => f64::MAX,
+                    };
+                    if self.flagged[i as usize] {
+                        self.pkey[i as usize] = k;
+                    } else {
+                        self.enqueue_photon(i as usize, k);
+                    }
+                }
+            }
+            self.sort_queue();
+            return;
+        }
         for g in groups {
             for m in 0..self.layout.members {
                 self.flagged[self.layout.photon(g, m) as usize] = true;
@@ -683,6 +792,15 @@ impl SptState {
     }
 
     fn sort_queue(&mut self) {
+        if self.settings.per_photon() {
+            self.queue = (0..self.flagged.len() as u32)
+                .filter(|&i| self.flagged[i as usize])
+                .collect();
+            let key = &self.pkey;
+            self.queue
+                .sort_by(|a, b| key[*a as usize].total_cmp(&key[*b as usize]).then(b.cmp(a)));
+            return;
+        }
         self.queue = (0..self.layout.groups as u32)
             .filter(|&g| self.queued[g as usize])
             .collect();
@@ -695,6 +813,9 @@ impl SptState {
     /// (photons of a batch of groups are traced in parallel and applied in queue order,
     /// so the result does not depend on the thread count).
     pub fn drain(&mut self, budget: Budget) -> UpdateStats {
+        if self.settings.per_photon() {
+            return self.drain_photons(budget);
+        }
         let t0 = Instant::now();
         let mut st = UpdateStats::default();
         let members = self.layout.members;
@@ -778,6 +899,64 @@ impl SptState {
         st
     }
 
+    /// [`SptState::drain`] when the queue holds photons ([`SptSettings::per_photon`]):
+    /// photons in queue order, traced in parallel in batches of about 4096 per thread,
+    /// applied in queue order (the result does not depend on the thread count). The photon
+    /// budget is met exactly.
+    fn drain_photons(&mut self, budget: Budget) -> UpdateStats {
+        let t0 = Instant::now();
+        let mut st = UpdateStats::default();
+        let threads = rayon::current_num_threads() as u64;
+        let batch = 4096 * threads;
+        let n_groups = self.layout.groups as usize;
+        loop {
+            if self.queue.is_empty() {
+                break;
+            }
+            if let Some(t) = budget.time
+                && t0.elapsed() >= t
+            {
+                break;
+            }
+            let room = if budget.photons == 0 {
+                u64::MAX
+            } else {
+                budget.photons.saturating_sub(st.photons_traced)
+            };
+            let take = room.min(batch).min(self.queue.len() as u64) as usize;
+            if take == 0 {
+                break;
+            }
+            let indices: Vec<u64> = (0..take)
+                .map(|_| self.queue.pop().expect("queue holds `take` photons") as u64)
+                .collect();
+            let (recs, ps) =
+                trace_records(&self.scene, &self.mesh, &indices, self.settings.common.seed);
+            st.rays += ps.rays;
+            st.photons_traced += indices.len() as u64;
+            for (&i, rec) in indices.iter().zip(recs) {
+                let i = i as usize;
+                self.solution.apply(&self.records[i], -1.0);
+                self.solution.apply(&rec, 1.0);
+                self.records[i] = rec;
+                self.flagged[i] = false;
+                let g = i % n_groups;
+                self.pending[g] -= 1;
+                if self.pending[g] == 0 {
+                    self.queued[g] = false;
+                    self.queued_groups -= 1;
+                    st.groups_reshot += 1;
+                }
+            }
+        }
+        if self.queue.is_empty() && !self.pilots_current {
+            self.pilots_current = true;
+        }
+        st.groups_queued = self.queued_groups;
+        st.seconds = t0.elapsed().as_secs_f64();
+        st
+    }
+
     /// Re-traces every photon in the current scene and compares with the stored paths:
     /// stale groups, and of them those not queued (missed by their pilots). Costs a full
     /// pass; for tests and `--set audit=true`.
@@ -812,37 +991,6 @@ impl SptState {
         a
     }
 
-    /// Screen coverage of each element side: a `COVERAGE_GRID²` grid of primary rays
-    /// through pixel centres of the current camera, counted on the side they hit first.
-    fn screen_coverage(&self) -> Vec<f32> {
-        let scene = &self.scene;
-        let cam = &scene.camera;
-        let n = COVERAGE_GRID;
-        let rows = parallel::map_chunks(n as usize, 4, |r| {
-            let mut hits = Vec::new();
-            for y in r {
-                for x in 0..n {
-                    let raster = Vec2::new(
-                        (x as f32 + 0.5) / n as f32 * cam.width as f32,
-                        (y as f32 + 0.5) / n as f32 * cam.height as f32,
-                    );
-                    let ray = cam.generate_ray(raster);
-                    if let Some(h) = scene.intersect(&ray) {
-                        let si = scene.interaction(&h, &ray);
-                        let e = self.mesh.locate(h.tri, h.b1, h.b2).element;
-                        hits.push(slot(e, -ray.d.dot(si.ng) >= 0.0));
-                    }
-                }
-            }
-            hits
-        });
-        let mut c = vec![0.0f32; 2 * self.mesh.element_count()];
-        for s in rows.into_iter().flatten() {
-            c[s] += 1.0;
-        }
-        c
-    }
-
     /// The element sums as the reconstruction reads them: (direct, indirect, caustic).
     pub fn accumulators(
         &self,
@@ -863,4 +1011,34 @@ impl SptState {
     pub fn frame_elements(&self) -> FrameElements {
         FrameElements::new(&self.scene, &self.mesh)
     }
+}
+
+/// Screen coverage of each element side of `mesh` (indexed by [`slot`]): an `n × n` grid of
+/// primary rays through pixel centres of `scene`'s camera, counted on the side each hits
+/// first.
+pub fn screen_coverage(scene: &FrameScene, mesh: &ElementMesh, n: u32) -> Vec<f32> {
+    let cam = &scene.camera;
+    let rows = parallel::map_chunks(n as usize, 4, |r| {
+        let mut hits = Vec::new();
+        for y in r {
+            for x in 0..n {
+                let raster = Vec2::new(
+                    (x as f32 + 0.5) / n as f32 * cam.width as f32,
+                    (y as f32 + 0.5) / n as f32 * cam.height as f32,
+                );
+                let ray = cam.generate_ray(raster);
+                if let Some(h) = scene.intersect(&ray) {
+                    let si = scene.interaction(&h, &ray);
+                    let e = mesh.locate(h.tri, h.b1, h.b2).element;
+                    hits.push(slot(e, -ray.d.dot(si.ng) >= 0.0));
+                }
+            }
+        }
+        hits
+    });
+    let mut c = vec![0.0f32; 2 * mesh.element_count()];
+    for s in rows.into_iter().flatten() {
+        c[s] += 1.0;
+    }
+    c
 }

@@ -151,6 +151,20 @@ def halves_flip(d, frames, pattern_a, pattern_b, refs):
     return float(np.mean(v)) if v else None
 
 
+def flicker_floor(d, frames, pattern_a, pattern_b):
+    """What a reference's own noise adds to the flicker figure (harness metrics.py):
+    mean over consecutive pairs of mean |((A_t - A_t-1) - (B_t - B_t-1)) / 2| / mean(R_t)."""
+    v = []
+    for k in range(1, len(frames)):
+        if frames[k] != frames[k - 1] + 1:
+            continue
+        A = [read_beauty(os.path.join(d, pattern_a.format(f))) for f in frames[k - 1:k + 1]]
+        B = [read_beauty(os.path.join(d, pattern_b.format(f))) for f in frames[k - 1:k + 1]]
+        R = 0.5 * (A[1] + B[1])
+        v.append(float(np.mean(np.abs(((A[1] - A[0]) - (B[1] - B[0])) / 2)) / R.mean()))
+    return float(np.mean(v)) if v else None
+
+
 def machine(out):
     lines = [f"date {datetime.datetime.now(datetime.timezone.utc).isoformat()}"]
     try:
@@ -188,6 +202,8 @@ def scene_run(a, sc, out, work):
                        "frames": {f: ri.get("frames") for f, ri in refinfo.items()}}
     res["ref_ours"]["halves_flip"] = halves_flip(dref, scored, "f{0:04d}/frame_{0:04d}_A.exr",
                                                  "f{0:04d}/frame_{0:04d}_B.exr", refs)
+    res["ref_ours"]["flicker_floor"] = flicker_floor(dref, scored, "f{0:04d}/frame_{0:04d}_A.exr",
+                                                     "f{0:04d}/frame_{0:04d}_B.exr")
     if do_cycles:
         cref = os.path.join(sw, "ref-cycles")
         if not os.path.exists(os.path.join(cref, "ref.json")):
@@ -199,6 +215,7 @@ def scene_run(a, sc, out, work):
         crefs = [read_beauty(os.path.join(cref, f"frame_{f:04d}.exr")) for f in scored]
         res["ref_cycles"] = json.load(open(os.path.join(cref, "ref.json")))
         res["ref_cycles"]["halves_flip"] = halves_flip(cref, scored, "frame_{:04d}_A.exr", "frame_{:04d}_B.exr", crefs)
+        res["ref_cycles"]["flicker_floor"] = flicker_floor(cref, scored, "frame_{:04d}_A.exr", "frame_{:04d}_B.exr")
         res["fidelity_flip"] = float(np.mean([flip(c, o) for c, o in zip(crefs, refs)]))
         res["fidelity_mean_ratio"] = float(np.mean([o.mean() / c.mean() for c, o in zip(crefs, refs)]))
 
@@ -219,6 +236,8 @@ def scene_run(a, sc, out, work):
         json.dump({"cpu_s_all": cpu, "wall_s": wall, "maxrss_kb": rss, "frames_rendered": len(frames),
                    "cpu_s_scored": cpu * len(scored) / len(frames), "flip": fl, "flicker": fk}, open(lit, "w"), indent=1)
     res["literal"] = json.load(open(lit))
+    # frames the default route rendered as `path` (its path probe found nothing to reuse)
+    res["literal"]["frames_as_path"] = open(os.path.join(so, "literal.log")).read().count("rendered as path")
     rj = json.load(open(os.path.join(so, "literal.run.json")))
     res["route"] = route = route_of(rj)
 
@@ -319,17 +338,29 @@ def table(results, a, model, flags):
         fr = "—"
         if c and c["0.08"]["flicker"] and o["0.08"]["flicker"]:
             fr = f"{o['0.08']['flicker'] / c['0.08']['flicker']:.2f}"
-        L.append(f"| {r['name']} ({r['what']}) | {fid} | {lit['cpu_s_scored']:.2f} ({lit['flip']:.3f}, {lit['flicker']:.4f}) | "
+        asp = f"; {lit['frames_as_path']}/{lit['frames_rendered']} frames as `path`" if lit.get("frames_as_path") else ""
+        L.append(f"| {r['name']} ({r['what']}) | {fid} | {lit['cpu_s_scored']:.2f} ({lit['flip']:.3f}, {lit['flicker']:.4f}{asp}) | "
                  f"{fmt(o['0.08']['cpu_s'], o['0.08']['bound'])} / {fmt(o['0.05']['cpu_s'], o['0.05']['bound'])} | "
                  f"{fmt(p['0.08']['cpu_s'], p['0.08']['bound'])} / {fmt(p['0.05']['cpu_s'], p['0.05']['bound'])} | "
                  + (f"{fmt(c['0.08']['cpu_s'], c['0.08']['bound'])} / {fmt(c['0.05']['cpu_s'], c['0.05']['bound'])} | "
                     f"**{ratio(c['0.08'], o['0.08'])} / {ratio(c['0.05'], o['0.05'])}** | {fr} | " if c else "— | — | — | ")
                  + f"{ratio(p['0.08'], o['0.08'])} |")
+    L += ["", "References' own noise (HDR-FLIP of half A vs half B, about 1.4x the full reference's; flicker floor "
+          "= what the reference's noise adds to the flicker figure):", "",
+          "| scene | ours: spp, halves FLIP, flicker floor | Cycles: spp, halves FLIP, flicker floor |", "|---|---|---|"]
+    for r in results:
+        ro, rc = r["ref_ours"], r.get("ref_cycles")
+        spp = sorted({(fr[0] or {}).get("stats", {}).get("spp") for fr in ro["frames"].values() if fr} - {None})
+        g = lambda x: "—" if x is None else f"{x:.3f}"  # noqa: E731
+        L.append(f"| {r['name']} | {'/'.join(map(str, spp))}, {g(ro.get('halves_flip'))}, {g(ro.get('flicker_floor'))} | "
+                 + (f"{rc['spp']}, {g(rc.get('halves_flip'))}, {g(rc.get('flicker_floor'))} |" if rc else "— |"))
     return "\n".join(L) + "\n"
 
 
 def scale_run(a, scenes, out, work):
     sc = scenes[a.scale]
+    if os.path.exists(os.path.join(out, "scale-1080p.json")):
+        return json.load(open(os.path.join(out, "scale-1080p.json")))
     d = os.path.join(work, "scale-1080p")
     shutil.rmtree(d, ignore_errors=True)
     tf = os.path.join(out, "scale-1080p.time")

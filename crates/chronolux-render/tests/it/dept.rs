@@ -1,7 +1,7 @@
 //! DEPT: element bookkeeping on moving objects, the filters, convergence to the path
 //! tracer on a static diffuse scene, determinism.
 
-use crate::frame0;
+use crate::{blocks, frame0};
 use chronolux_core::color::Rgb;
 use chronolux_core::math::Vec3;
 use chronolux_core::scene::desc::{
@@ -21,25 +21,6 @@ use chronolux_render::kernels::elements::{Dept, DeptSettings};
 use chronolux_render::kernels::path::{PathSettings, PathTracer};
 use chronolux_render::kernels::photon::trace_photons;
 use std::sync::Arc;
-
-/// Mean of each `b`×`b` block (channel average).
-fn blocks(px: &[glam::Vec3], w: usize, b: usize) -> Vec<f64> {
-    let h = px.len() / w;
-    let mut out = Vec::new();
-    for by in 0..h / b {
-        for bx in 0..w / b {
-            let mut s = 0.0;
-            for y in 0..b {
-                for x in 0..b {
-                    let p = px[(by * b + y) * w + bx * b + x];
-                    s += ((p.x + p.y + p.z) / 3.0) as f64;
-                }
-            }
-            out.push(s / (b * b) as f64);
-        }
-    }
-    out
-}
 
 /// Largest relative error over 8×8-pixel blocks, and of the image mean.
 fn block_errors(img: &[glam::Vec3], reference: &[f64], w: usize) -> (f64, f64) {

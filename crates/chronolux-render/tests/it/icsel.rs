@@ -1,8 +1,8 @@
 //! `ic-selective` (issue 13): the per-direction store, selection by age, no stale hits,
 //! per-stratum agreement with a frame-by-frame gather, no accumulation of error.
 
-use crate::bits;
 use crate::pmic::cornell_moving;
+use crate::{bits, blocks};
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::math::Frame;
 use chronolux_core::sampling::rng::Pcg32;
@@ -397,25 +397,6 @@ fn error_against_pm_ic_does_not_grow_over_100_frames() {
         l / e
     );
     assert!(l <= 1.5 * e, "error grew: early {e:.4}, late {l:.4}");
-}
-
-/// Mean of each `b`×`b` block (channel average).
-fn blocks(px: &[glam::Vec3], w: usize, b: usize) -> Vec<f64> {
-    let h = px.len() / w;
-    let mut out = Vec::new();
-    for by in 0..h / b {
-        for bx in 0..w / b {
-            let mut s = 0.0;
-            for y in 0..b {
-                for x in 0..b {
-                    let p = px[(by * b + y) * w + bx * b + x];
-                    s += ((p.x + p.y + p.z) / 3.0) as f64;
-                }
-            }
-            out.push(s / (b * b) as f64);
-        }
-    }
-    out
 }
 
 /// The moving-cube sequence at 32 × 32 (8 spp, 60 000 photons, the default 12 × 36

@@ -47,6 +47,25 @@ pub fn source(
     chronolux_core::scene::source::FrameSource::new(b, fps, frames)
 }
 
+/// Mean of each `b`×`b` block (channel average).
+pub fn blocks(px: &[glam::Vec3], w: usize, b: usize) -> Vec<f64> {
+    let h = px.len() / w;
+    let mut out = Vec::new();
+    for by in 0..h / b {
+        for bx in 0..w / b {
+            let mut s = 0.0;
+            for y in 0..b {
+                for x in 0..b {
+                    let p = px[(by * b + y) * w + bx * b + x];
+                    s += ((p.x + p.y + p.z) / 3.0) as f64;
+                }
+            }
+            out.push(s / (b * b) as f64);
+        }
+    }
+    out
+}
+
 /// Mean and standard error of the mean over pixels (channel average).
 pub fn mean_and_stderr(px: &[glam::Vec3]) -> (f64, f64) {
     let v: Vec<f64> = px

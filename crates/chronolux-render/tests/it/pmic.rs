@@ -1,8 +1,8 @@
 //! `pm-ic` and `ic-static-dynamic`: photon-map estimates, irradiance-cache interpolation
 //! and gradients against analytic cases, convergence to the path tracer, determinism.
 
-use crate::bits;
 use crate::frame0;
+use crate::{bits, blocks};
 use chronolux_core::color::Rgb;
 use chronolux_core::math::Vec3;
 use chronolux_core::sampling::rng::Pcg32;
@@ -226,25 +226,6 @@ fn gradients_agree_with_finite_differences() {
         );
         last = et;
     }
-}
-
-/// Mean of each `b`×`b` block (channel average).
-fn blocks(px: &[glam::Vec3], w: usize, b: usize) -> Vec<f64> {
-    let h = px.len() / w;
-    let mut out = Vec::new();
-    for by in 0..h / b {
-        for bx in 0..w / b {
-            let mut s = 0.0;
-            for y in 0..b {
-                for x in 0..b {
-                    let p = px[(by * b + y) * w + bx * b + x];
-                    s += ((p.x + p.y + p.z) / 3.0) as f64;
-                }
-            }
-            out.push(s / (b * b) as f64);
-        }
-    }
-    out
 }
 
 /// On the diffuse Cornell box `pm-ic` converges to the path tracer within its bias.

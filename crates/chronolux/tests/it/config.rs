@@ -274,18 +274,14 @@ fn bench_quality_measures_a_subset_of_the_rendered_frames() {
     );
 }
 
-/// `bench update --change occluder`: the block that appears under the lamp is its own
-/// instance in both configurations, so the update invalidates only the photon groups whose
-/// paths meet it (found by the pilots and the path scan), not the whole pool. The block
-/// covers part of the lamp's downward hemisphere only, so some groups must stay valid:
-/// with the block read as static geometry (the bug this guards) every group is invalid.
-#[test]
-fn bench_update_occluder_invalidates_only_the_groups_it_touches() {
+/// `bench update --change CHANGE` on a 20k-photon pool (reference of the same size, 2
+/// threads), its JSON report.
+fn bench_update_json(change: &str) -> serde_json::Value {
     let out = run([
         "bench",
         "update",
         "--change",
-        "occluder",
+        change,
         "--photons",
         "20000",
         "--ref-factor",
@@ -295,7 +291,17 @@ fn bench_update_occluder_invalidates_only_the_groups_it_touches() {
         "--json",
     ]);
     ok(&out);
-    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    serde_json::from_str(&stdout(&out)).unwrap()
+}
+
+/// `bench update --change occluder`: the block that appears under the lamp is its own
+/// instance in both configurations, so the update invalidates only the photon groups whose
+/// paths meet it (found by the pilots and the path scan), not the whole pool. The block
+/// covers part of the lamp's downward hemisphere only, so some groups must stay valid:
+/// with the block read as static geometry (the bug this guards) every group is invalid.
+#[test]
+fn bench_update_occluder_invalidates_only_the_groups_it_touches() {
+    let j = bench_update_json("occluder");
     let groups = j["groups"].as_u64().unwrap();
     let p = &j["orders"]["priority"];
     let invalid = p["groups_invalidated"].as_u64().unwrap();
@@ -321,21 +327,7 @@ fn bench_update_occluder_invalidates_only_the_groups_it_touches() {
 /// errors of the two orders agree to 10⁻⁵ relative.
 #[test]
 fn bench_update_nudge_reshoots_only_the_flagged_photons_in_either_order() {
-    let out = run([
-        "bench",
-        "update",
-        "--change",
-        "nudge",
-        "--photons",
-        "20000",
-        "--ref-factor",
-        "1",
-        "--threads",
-        "2",
-        "--json",
-    ]);
-    ok(&out);
-    let j: serde_json::Value = serde_json::from_str(&stdout(&out)).unwrap();
+    let j = bench_update_json("nudge");
     let o = &j["orders"];
     let photons = |n: &str| o[n]["photons_total"].as_u64().unwrap();
     assert_eq!(photons("priority"), photons("random"), "{j}");

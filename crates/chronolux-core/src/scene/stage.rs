@@ -536,6 +536,15 @@ pub fn caustic() -> SceneDesc {
     d
 }
 
+/// The node carrying the stage camera (camera 0) of a built-in scene.
+fn stage_camera_node(d: &SceneDesc) -> NodeId {
+    d.nodes
+        .iter()
+        .position(|n| n.camera == Some(CameraId(0)))
+        .map(|i| NodeId(i as u32))
+        .expect("the stage camera's node")
+}
+
 /// The demo ([`demo`]) filmed by a moving camera: over the clip the stage camera trucks
 /// from x = −0.3 to +0.3 (room half-widths), dollies in from z = 3.9 to 3.3 and turns to
 /// keep the room's centre (0, 1, 0) in the middle of the frame (LINEAR keys at 0, 1 and
@@ -548,12 +557,7 @@ pub fn dolly() -> SceneDesc {
     let mut d = demo();
     d.name = "dolly".into();
     d.animations[0].name = "dolly".into();
-    let cam = d
-        .nodes
-        .iter()
-        .position(|n| n.camera == Some(CameraId(0)))
-        .map(|i| NodeId(i as u32))
-        .expect("the stage camera's node");
+    let cam = stage_camera_node(&d);
     let h = ROOM_HALF;
     let times = vec![0.0, 0.5 * DEMO_DURATION, DEMO_DURATION];
     let keys = [(-0.3 * h, 3.9 * h), (0.0, 3.6 * h), (0.3 * h, 3.3 * h)];
@@ -596,12 +600,7 @@ pub fn dolly() -> SceneDesc {
 pub fn flythrough() -> SceneDesc {
     let mut d = dolly();
     d.name = "flythrough".into();
-    let cam = d
-        .nodes
-        .iter()
-        .position(|n| n.camera == Some(CameraId(0)))
-        .map(|i| NodeId(i as u32))
-        .expect("the stage camera's node");
+    let cam = stage_camera_node(&d);
     let clip = &mut d.animations[0];
     clip.name = "flythrough".into();
     clip.channels.retain(|c| c.node == cam);

@@ -534,15 +534,14 @@ impl SpacetimeDept {
         }
     }
 
-    /// Whether every frame of `frame`'s window shows `frame`'s set (only the camera
-    /// differs between consecutive frames of the window), so that the frame reads the
-    /// still solution (module documentation, "Still sets").
-    fn window_is_still(&self, source: &mut FrameSource, frame: u32) -> bool {
+    /// Whether every frame of `window` (the output frame's) shows the same set (only the
+    /// camera differs between consecutive frames), so that the frame reads the still
+    /// solution (module documentation, "Still sets").
+    fn window_is_still(&self, source: &mut FrameSource, window: &[u32]) -> bool {
         let s = &self.settings;
         if !s.still_set || s.auto.is_some() {
             return false;
         }
-        let window = source.window(frame, s.window, s.window);
         if window.len() < 2 {
             return false;
         }
@@ -1031,11 +1030,13 @@ impl SequenceRenderer for SpacetimeDept {
         // Wall-clock phases for `RUST_LOG=chronolux_render=debug` (a profile, not a
         // benchmark: see BENCHMARKS.md for CPU seconds).
         let t0 = std::time::Instant::now();
-        let still = self.window_is_still(source, frame);
+        // The frames of the output frame's window (the per-side windows below are cut
+        // from it).
+        let around = source.window(frame, s.window, s.window);
+        let still = self.window_is_still(source, &around);
         if still {
             // The sliding frames are not needed while the window shows the still set.
-            let w = source.window(frame, s.window, s.window);
-            self.frames.retain(|t| w.contains(&t.frame));
+            self.frames.retain(|t| around.contains(&t.frame));
         } else {
             self.trace_window(source, frame, &scene_arc);
         }
@@ -1048,8 +1049,7 @@ impl SequenceRenderer for SpacetimeDept {
         let (ind, cau, window, photon_rays, still_report) = if still {
             let (ind, cau, photons, rays) = self.still_solution(&scene_arc, &mesh, &fe, nb);
             self.last_photons = Some(photons);
-            let w = source.window(frame, s.window, s.window);
-            let whole = (w[0], *w.last().expect("frame in its window"));
+            let whole = (around[0], *around.last().expect("frame in its window"));
             let report = serde_json::json!({ "photons": photons, "traced_here": rays > 0 });
             (ind, cau, vec![whole; fe.area.len() * 2], rays, Some(report))
         } else {

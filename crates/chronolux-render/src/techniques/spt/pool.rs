@@ -295,6 +295,19 @@ pub struct Budget {
 }
 
 impl Budget {
+    /// Photons this budget still allows after `traced` in a drain started at `t0`
+    /// (`u64::MAX` without a photon limit), or `None` once its time is up.
+    fn room(&self, t0: Instant, traced: u64) -> Option<u64> {
+        if self.time.is_some_and(|t| t0.elapsed() >= t) {
+            return None;
+        }
+        Some(if self.photons == 0 {
+            u64::MAX
+        } else {
+            self.photons.saturating_sub(traced)
+        })
+    }
+
     /// No limit: drain the whole queue.
     pub const ALL: Budget = Budget {
         photons: 0,
@@ -830,15 +843,8 @@ impl SptState {
             if self.queue.is_empty() {
                 break;
             }
-            if let Some(t) = budget.time
-                && t0.elapsed() >= t
-            {
+            let Some(room) = budget.room(t0, st.photons_traced) else {
                 break;
-            }
-            let room = if budget.photons == 0 {
-                u64::MAX
-            } else {
-                budget.photons.saturating_sub(st.photons_traced)
             };
             // Whole groups in queue order, about 4096 photons per thread between time
             // checks, never past the photon budget.
@@ -913,15 +919,8 @@ impl SptState {
             if self.queue.is_empty() {
                 break;
             }
-            if let Some(t) = budget.time
-                && t0.elapsed() >= t
-            {
+            let Some(room) = budget.room(t0, st.photons_traced) else {
                 break;
-            }
-            let room = if budget.photons == 0 {
-                u64::MAX
-            } else {
-                budget.photons.saturating_sub(st.photons_traced)
             };
             let take = room.min(batch).min(self.queue.len() as u64) as usize;
             if take == 0 {

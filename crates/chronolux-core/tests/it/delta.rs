@@ -585,3 +585,20 @@ fn movable_nodes_get_their_own_instance_and_a_moved_one_is_all_that_changes() {
     .build(0.5);
     assert!(FrameDelta::between(&plain, &builder(desc).build(0.5)).is_static());
 }
+
+/// `only_camera_changed`: under the fly-through (the dolly's camera, nothing else moving)
+/// every pair of frames differs in the camera alone; under the dolly the cube moves too.
+#[test]
+fn only_the_camera_changes_in_the_flythrough() {
+    let fs: Vec<u32> = (0..6).collect();
+    let fly = frames(stage::flythrough(), &fs);
+    for w in fly.windows(2) {
+        let d = FrameDelta::between(&w[0], &w[1]);
+        assert!(d.only_camera_changed() && d.camera_changed() && !d.is_static());
+    }
+    let dolly = frames(stage::dolly(), &fs);
+    let d = FrameDelta::between(&dolly[0], &dolly[5]);
+    assert!(d.camera_changed() && !d.only_camera_changed());
+    let same = FrameDelta::between(&dolly[2], &dolly[2]);
+    assert!(same.only_camera_changed() && same.is_static());
+}

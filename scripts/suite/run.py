@@ -228,8 +228,8 @@ def scene_run(a, sc, out, work):
         tf = os.path.join(so, "literal.time")
         with open(os.path.join(so, "literal.log"), "w") as lg:
             run(["/usr/bin/time", "-f", "wall_s %e user_s %U sys_s %S maxrss_kb %M", "-o", tf, a.bin, "render",
-                 sc["path"], *sc.get("args", []), "--frames", a.frames, "--max-depth", "8", "--resolution", R,
-                 "-o", d], stdout=lg, stderr=lg)
+                 sc["path"], *sc.get("args", []), *ours_set(a), "--frames", a.frames, "--max-depth", "8",
+                 "--resolution", R, "-o", d], stdout=lg, stderr=lg)
         shutil.copy(os.path.join(d, "run.json"), os.path.join(so, "literal.run.json"))
         cpu, wall, rss = cpu_time(tf)
         fl, fk = score(d, "frame_{:04d}.exr", refs, scored)
@@ -261,7 +261,7 @@ def scene_run(a, sc, out, work):
         return {"levels": levels, "bench_interpolated_cpu_s": m.get("interpolated_cpu_s"),
                 **{str(t): at(levels, t) for t in TARGETS}}
 
-    res["ours_route"] = quality("route", route["args"], route["start"], route["stop"])
+    res["ours_route"] = quality("route", route["args"] + ours_set(a), route["start"], route["stop"])
     res["path_oidn"] = quality("path", ["--method", "path"], 1, a.path_max_spp)
 
     # 6. Cycles + OIDN
@@ -278,6 +278,11 @@ def scene_run(a, sc, out, work):
         res["cycles_oidn"] = {"levels": c["levels"], **{str(t): at(c["levels"], t) for t in TARGETS}}
     json.dump(res, open(os.path.join(so, "result.json"), "w"), indent=1)
     return res
+
+
+def ours_set(a):
+    """--set KEY=VALUE arguments for our default route (--ours-set), e.g. an A/B of one setting."""
+    return [x for kv in a.ours_set for x in ("--set", kv)]
 
 
 def at(levels, t):
@@ -397,6 +402,9 @@ def main():
     ap.add_argument("--cycles-levels", default="1,2,4,8,16,32,64")
     ap.add_argument("--path-max-spp", type=int, default=256)
     ap.add_argument("--no-cycles", action="store_true")
+    ap.add_argument("--ours-set", action="append", default=[], metavar="KEY=VALUE",
+                    help="a setting of our default route's technique, passed as --set to its render and bench quality "
+                         "(repeatable; for an A/B of one setting in one run)")
     ap.add_argument("--label", default="", help="e.g. 'reduced: ...', printed with the table")
     ap.add_argument("--scale", help="a scene name for the 1920x1080 scale run")
     ap.add_argument("--scale-frames", default="0..4")

@@ -371,8 +371,8 @@ def scale_run(a, scenes, out, work):
     tf = os.path.join(out, "scale-1080p.time")
     log(out, f"scale: {a.scale} at 1920x1080, frames {a.scale_frames}")
     with open(os.path.join(out, "scale-1080p.log"), "w") as lg:
-        run(["/usr/bin/time", "-v", "-o", tf, a.bin, "render", sc["path"], *sc.get("args", []), "--frames",
-             a.scale_frames, "--max-depth", "8", "--resolution", "1920x1080", "-o", d], stdout=lg, stderr=lg)
+        run(["/usr/bin/time", "-v", "-o", tf, a.bin, "render", sc["path"], *sc.get("args", []), *ours_set(a),
+             "--frames", a.scale_frames, "--max-depth", "8", "--resolution", "1920x1080", "-o", d], stdout=lg, stderr=lg)
     t = open(tf).read()
     g = lambda k: float(re.search(re.escape(k) + r":\s*([\d.]+)", t).group(1))  # noqa: E731
     n = len(frame_range(a.scale_frames))

@@ -10,18 +10,13 @@ import base64, json, math, struct, sys
 from pathlib import Path
 
 
+sys.path.insert(0, str(Path(__file__).parent / "suite"))
+from make_scenes import cube as box  # noqa: E402  (one box generator for every scene script)
+
+
 def cube(c, h):
-    quads = [((0, 0, 1), (1, 0, 0)), ((0, 0, -1), (-1, 0, 0)), ((1, 0, 0), (0, 0, -1)),
-             ((-1, 0, 0), (0, 0, 1)), ((0, 1, 0), (1, 0, 0)), ((0, -1, 0), (1, 0, 0))]
-    pos, nrm, idx = [], [], []
-    for n, u in quads:
-        v = (n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0])
-        base = len(pos)
-        for a, b in [(-1, -1), (1, -1), (1, 1), (-1, 1)]:
-            pos.append(tuple(c[i] + h * (n[i] + a * u[i] + b * v[i]) for i in range(3)))
-            nrm.append(n)
-        idx += [base, base + 1, base + 2, base, base + 2, base + 3]
-    return pos, nrm, idx
+    """Cube centred at c with half-size h: the suite's box with equal half-sizes."""
+    return box(c, (h, h, h))
 
 
 def ground(s):

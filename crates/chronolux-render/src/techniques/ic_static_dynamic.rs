@@ -66,6 +66,26 @@
 //! This is coarser than the papers' per-light split (only the moving light's photons
 //! dynamic), because the kernel chooses a photon's light from its own Halton dimension.
 //!
+//! ### The correction (issue 41)
+//! `E_D,ind` is the change of a static record's indirect irradiance between `S` and the
+//! frame. By default (`correction_m = 0`) it is the density estimate at the record of the
+//! dynamic photons a gather would see: cheap (one lookup), but it is a raw density
+//! estimate of a few thousand signed photons, noisy and blurred over the map's radius,
+//! and at 256² its blotches span pixels where FLIP sees them (BENCHMARKS.md, "Which
+//! holds": with β forced to 1 the whole FLIP gap to `pm-ic` disappears). With
+//! `correction_m = m > 0` it is instead a **final gather of the change**: `m × 3m`
+//! strata at the record, each ray traced in the frame through specular chains as
+//! `pm-ic`'s gather rays are; where the chain meets only static instances its hit is the
+//! same point in `S` (static instances do not move within a segment, and `S` has no other
+//! geometry), so the stratum's change is the **dynamic map's** radiance there (the frame
+//! map is the static map with the dynamic photons added and their static twins
+//! subtracted); where it meets a dynamic instance, the change is the frame map's radiance
+//! at the chain's end in the frame less the static map's at its end in `S` (one more ray
+//! and two full lookups, on the few strata that see the moving object). The dynamic map
+//! is small, so most lookups find no photon within the radius and end early: a record's
+//! correction costs a fraction of a gather. Its jitter is hashed from the record's point,
+//! so the same directions are used in every frame of the segment (coherent in time).
+//!
 //! ## Bias
 //! Where `β = 1` this is `pm-ic`'s estimator on the same photons (same bias, see
 //! [`super`]). Where `β = 0` the static cache's interpolation bias (same bound) is
@@ -86,6 +106,7 @@
 
 use crate::framework::integrator::{RenderedFrame, render_camera_rays};
 use crate::kernels::gather::irradiance_cache::IrradianceCache;
+use crate::kernels::gather::irradiance_cache::stratum_direction;
 use crate::kernels::gather::photon_map::{PhotonMap, StoredPhoton, cancel_twins};
 use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource, NoIndirect};
 use crate::kernels::gather::{
@@ -94,9 +115,10 @@ use crate::kernels::gather::{
 };
 use crate::kernels::photon::segment_hits_box;
 use crate::kernels::photon::{PhotonHit, trace_photon_path};
+use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, luminance};
-use chronolux_core::geometry::Bounds3;
-use chronolux_core::math::{Vec2, Vec3};
+use chronolux_core::geometry::{Bounds3, spawn_ray};
+use chronolux_core::math::{Frame, Vec2, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::hash_words;
 use chronolux_core::sampling::rng::Pcg32;
@@ -126,6 +148,11 @@ pub struct IcStaticDynamicSettings {
     /// `fallback_accuracy · a` instead of a gather that is not stored; 0: gather, as
     /// `pm-ic`. Default 2.
     pub fallback_accuracy: f32,
+    /// How the change `E_D,ind` of a static record's indirect irradiance is estimated:
+    /// 0, the dynamic map's density estimate at the record (blurred over the map's
+    /// radius); `m > 0`, a final gather of `m × 3m` strata in the frame reading the
+    /// dynamic map (see "The correction" in the module doc). Default 0.
+    pub correction_m: u32,
 }
 
 impl Default for IcStaticDynamicSettings {
@@ -140,6 +167,7 @@ impl Default for IcStaticDynamicSettings {
             influence_high: 0.25,
             influence_sigmas: 2.0,
             fallback_accuracy: 2.0,
+            correction_m: 0,
         }
     }
 }
@@ -736,7 +764,21 @@ impl IcStaticDynamic {
                 recs[r]
                     .iter()
                     .map(|rec| {
-                        let corr = if ph.dyn_gathered.is_empty() {
+                        let corr = if ph.dyn_gathered.is_empty() && ph.dyn_map.is_empty() {
+                            Rgb::ZERO
+                        } else if self.settings.correction_m > 0 {
+                            let frame_map = ph.frame_map.as_ref().unwrap_or(&seg.map);
+                            let c = Correction {
+                                settings: s,
+                                frame: scene,
+                                static_scene: &seg.scene,
+                                dynamic: &seg.dynamic,
+                                dyn_map: &ph.dyn_map,
+                                frame_map,
+                                static_map: &seg.map,
+                            };
+                            c.gathered(rec.p, rec.n, self.settings.correction_m)
+                        } else if ph.dyn_gathered.is_empty() {
                             Rgb::ZERO
                         } else {
                             ph.dyn_gathered.irradiance(rec.p, rec.n, &s.global, r_g)
@@ -861,6 +903,133 @@ impl IcStaticDynamic {
             })
             .collect()
     }
+}
+
+/// The gathered estimate of a static record's change of indirect irradiance (module doc,
+/// "The correction").
+struct Correction<'a> {
+    settings: &'a PmIcSettings,
+    frame: &'a FrameScene,
+    static_scene: &'a FrameScene,
+    dynamic: &'a [bool],
+    dyn_map: &'a PhotonMap,
+    frame_map: &'a PhotonMap,
+    static_map: &'a PhotonMap,
+}
+
+impl Correction<'_> {
+    /// `E_F(x) − E_S(x)` by an `m × 3m` stratified gather at `(x, n)`: per stratum the
+    /// dynamic map's radiance at the hit where the gather ray's chain meets only static
+    /// instances (there the hit is the same in `S` and `F`), else the frame map's radiance
+    /// at the chain's end in `F` less the static map's at its end in `S`. The strata's
+    /// jitter is hashed from the record's point only, so a record gathers along the same
+    /// directions in every frame of the segment.
+    fn gathered(&self, x: Vec3, n: Vec3, m: u32) -> Rgb {
+        let s = self.settings;
+        let key = hash_words(&[s.common.seed, point_key(x, n), 0x636f_7272]);
+        let mut jr = Pcg32::new(key, 0x6a69_7474);
+        let mut rng = Pcg32::new(hash_words(&[key, 1]), 0x6761_7468);
+        let np = 3 * m;
+        let frame = Frame::from_normal(n);
+        let r_max = world_radius(self.frame, &s.global);
+        let mut sum = Rgb::ZERO;
+        for j in 0..m {
+            for k in 0..np {
+                let (dir, _) = stratum_direction(&frame, m, np, j, k, jr.next_f32(), jr.next_f32());
+                let start = rng.clone();
+                let (l, touched) = chain_radiance(
+                    self.frame,
+                    s,
+                    self.dyn_map,
+                    self.dynamic,
+                    x,
+                    n,
+                    dir,
+                    &mut rng,
+                    r_max,
+                );
+                sum += if touched {
+                    let (mut a, mut b) = (start.clone(), start);
+                    let lf = chain_radiance(
+                        self.frame,
+                        s,
+                        self.frame_map,
+                        &[],
+                        x,
+                        n,
+                        dir,
+                        &mut a,
+                        r_max,
+                    )
+                    .0;
+                    let ls = chain_radiance(
+                        self.static_scene,
+                        s,
+                        self.static_map,
+                        &[],
+                        x,
+                        n,
+                        dir,
+                        &mut b,
+                        r_max,
+                    )
+                    .0;
+                    lf - ls
+                } else {
+                    l
+                };
+            }
+        }
+        sum * (std::f32::consts::PI / (m * np) as f32)
+    }
+}
+
+/// The radiance `map` gives along a gather ray from `(x, n)` in direction `dir` (through
+/// specular chains as [`crate::kernels::gather::gather_ray`]), and whether a vertex of its
+/// chain lies on an instance marked in `dynamic` (ids past its end count as dynamic).
+#[allow(clippy::too_many_arguments)]
+fn chain_radiance(
+    scene: &FrameScene,
+    s: &PmIcSettings,
+    map: &PhotonMap,
+    dynamic: &[bool],
+    x: Vec3,
+    n: Vec3,
+    dir: Vec3,
+    rng: &mut Pcg32,
+    r_max: f32,
+) -> (Rgb, bool) {
+    let mut ray = spawn_ray(x, n, dir);
+    let mut beta = Rgb::ONE;
+    let mut touched = false;
+    let on_dynamic =
+        |i: u32| !dynamic.is_empty() && dynamic.get(i as usize).copied().unwrap_or(true);
+    for _ in 0..=s.max_specular_depth {
+        let Some(hit) = scene.intersect(&ray) else {
+            return (Rgb::ZERO, touched);
+        };
+        let si = scene.interaction(&hit, &ray);
+        touched |= on_dynamic(si.instance);
+        let wo = -ray.d.normalize();
+        let bsdf = scene.bsdf(&si);
+        let (u_lobe, u_dir) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
+        if bsdf.has_non_delta() {
+            let ns = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };
+            return (
+                beta * map.radiance(si.p, ns, wo, &bsdf, &s.global, r_max),
+                touched,
+            );
+        }
+        let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
+            return (Rgb::ZERO, touched);
+        };
+        beta *= bs.weight;
+        if beta == Rgb::ZERO {
+            break;
+        }
+        ray = spawn_ray(si.p, si.ng, bs.wi);
+    }
+    (Rgb::ZERO, touched)
 }
 
 /// The influence measure and blend weight (see the module doc).

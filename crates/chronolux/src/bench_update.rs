@@ -61,7 +61,7 @@ use chronolux_render::kernels::elements::element_map::{
 };
 use chronolux_render::kernels::elements::reconstruct::{Filter, Neighbours, filter_with};
 use chronolux_render::registry;
-use chronolux_render::techniques::spt::pool::{Budget, SptState, screen_coverage};
+use chronolux_render::techniques::spt::pool::{Budget, SptState, UpdateStats, screen_coverage};
 use chronolux_render::techniques::spt::{Order, SptSettings};
 use clap::Args;
 use serde_json::{Value, json};
@@ -398,6 +398,8 @@ pub fn run(a: UpdateArgs) -> Result<()> {
 }
 
 fn run_in_pool(a: UpdateArgs) -> Result<()> {
+    // The update's phases (`update_stats.phases`) in CPU seconds too.
+    chronolux_render::techniques::spt::pool::set_phase_clock(process_cpu_seconds);
     let input = scene_input::load(&a.scene)?;
     let (sa, sb, what) = configurations(&input, &a.change)?;
     let (sa, sb) = (Arc::new(sa), Arc::new(sb));
@@ -575,16 +577,17 @@ fn measure_order(
     // The whole update in one go (invalidate, drain everything), without the error
     // measurements between steps (they evict the caches the tracing works in): median of
     // UNINTERRUPTED_RUNS, each on a fresh state of A.
-    let mut whole: Vec<f64> = (0..UNINTERRUPTED_RUNS)
+    let mut runs: Vec<(f64, UpdateStats)> = (0..UNINTERRUPTED_RUNS)
         .map(|_| {
             let mut st = SptState::new_on_mesh(sa.clone(), s.clone(), mesh.clone());
             let c0 = process_cpu_seconds();
-            st.update(sb.clone(), changes, Budget::ALL);
-            process_cpu_seconds() - c0
+            let u = st.update(sb.clone(), changes, Budget::ALL);
+            (process_cpu_seconds() - c0, u)
         })
         .collect();
-    whole.sort_by(f64::total_cmp);
-    let cpu_update = whole[whole.len() / 2];
+    runs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let whole: Vec<f64> = runs.iter().map(|r| r.0).collect();
+    let (cpu_update, median_stats) = runs.swap_remove(runs.len() / 2);
     let mut st = SptState::new_on_mesh(sa.clone(), s, mesh.clone());
     let before = m.of_state(&st);
     let (c0, w0) = (process_cpu_seconds(), Instant::now());
@@ -642,6 +645,9 @@ fn measure_order(
         "wall_s_total": wall,
         "cpu_s_update": cpu_update,
         "cpu_s_update_runs": whole,
+        // The median whole update's own account: photons flagged, summaries passed,
+        // whether it restarted from scratch, rays, and the CPU seconds of its phases.
+        "update_stats": median_stats,
         "error_after_change": named(&|k| json!(curve[0].errors[k])),
         "final_error": named(&|k| json!(last[k])),
         "cpu_s_to_clean": named(&|k| json!(cross[k].map(|c| c.0))),

@@ -175,6 +175,16 @@ pub struct SptSettings {
     /// their groups). With `scan_paths = false` the pilots are the detector and are
     /// always traced. Default false.
     pub trace_pilots: bool,
+    /// Test each stored path's summary (box, instance and material masks: one contiguous
+    /// array) before reading its vertices in the path scan; `false`: the full test on
+    /// every stored path (the same flags, slower). Default true.
+    pub scan_bounds: bool,
+    /// When the path scan flags more than this fraction of the pool, the update restarts
+    /// from scratch (empty solution, the pool re-shot group by group in index order, as
+    /// `order = scratch` does) instead of re-shooting the flagged photons one by one
+    /// (each a removal, a new path and a key): reported as `restarted`. 1 = never.
+    /// Default 0.5.
+    pub restart_fraction: f64,
     /// Relative power difference at which a pilot's path counts as changed. Default 1e-4.
     pub path_tolerance: f32,
     /// Re-trace the whole pool after each update to count the pilots' misses (costly;
@@ -212,6 +222,8 @@ impl Default for SptSettings {
             scan_paths: true,
             reshoot: Reshoot::Photon,
             trace_pilots: false,
+            scan_bounds: true,
+            restart_fraction: 0.5,
             path_tolerance: 1e-4,
             audit: false,
             elements: 0.0,

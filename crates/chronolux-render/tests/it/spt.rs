@@ -573,3 +573,42 @@ fn the_eye_pass_agrees_with_dept_spatial_on_the_mean() {
     eprintln!("mean luminance: spt {ma}, dept-spatial {mb}");
     assert!(ma > 0.0 && (ma - mb).abs() <= 0.1 * mb);
 }
+
+/// The culled path scan (`scan_bounds`: path summaries first) flags exactly the photons
+/// the full scan flags, and the incremental screen coverage equals a full recomputation,
+/// on several changes of the demo: the block jump (frames 0 → 48), a small step (0 → 1)
+/// and back (48 → 0). Exact equality: both are the same tests on the same stored data.
+#[test]
+fn the_culled_scan_flags_exactly_what_the_full_scan_flags() {
+    use chronolux_render::techniques::spt::pool::{COVERAGE_GRID, screen_coverage};
+    for (fa, fb) in [(0, 48), (0, 1), (48, 0)] {
+        let (a, b) = two_frames(demo(), fa, fb);
+        let mesh = chronolux_render::kernels::elements::element_map::ElementMesh::build(&a, 30.0);
+        let changes = FrameDelta::between(&a, &b);
+        let flags = |cull: bool| {
+            let s = SptSettings {
+                scan_bounds: cull,
+                restart_fraction: 1.0,
+                ..settings(20_000)
+            };
+            let mut st = SptState::new_on_mesh(a.clone(), s, mesh.clone());
+            let u = st.invalidate(b.clone(), &changes);
+            let f: Vec<u64> = (0..st.layout.photons())
+                .filter(|&i| st.flagged(i))
+                .collect();
+            (f, u, st.coverage().to_vec())
+        };
+        let (full, uf, _) = flags(false);
+        let (culled, uc, cov) = flags(true);
+        eprintln!(
+            "frames {fa} → {fb}: {} flagged; candidates {} culled vs {} full",
+            full.len(),
+            uc.scan_candidates,
+            uf.scan_candidates
+        );
+        assert!(!full.is_empty());
+        assert_eq!(full, culled);
+        assert!(uc.scan_candidates < uf.scan_candidates);
+        assert_eq!(cov, screen_coverage(&b, &mesh, COVERAGE_GRID));
+    }
+}

@@ -71,9 +71,22 @@
 //!   order re-shoot the same exactly-flagged photons (11.1k), and the visible difference
 //!   lies on sides most of them touch (no visible difference after 86 % of them in
 //!   priority order, 99 % in random order), so the order gains little (0.84–1.34× CPU);
-//!   the gain over scratch is the flagged fraction (31× fewer photons) less a fixed
-//!   ≈ 20 ms per update (the scan of the stored paths, the coverage grid, the keys) and a
-//!   re-shot photon's extra cost (removal of its old deposits): 7.9–9.1× CPU.
+//!   the gain over scratch is the flagged fraction (31× fewer photons) less the fixed
+//!   costs and a re-shot photon's extra cost: 7.8× CPU (2026-12-08). Measured phases
+//!   (nudge, CPU ms): scan 11.5, keys 4.2, coverage 0.15, trace 23.8, apply 10.1; a
+//!   flagged photon's path is longer (3.77 rays against 2.30 for the pool), which no
+//!   bookkeeping removes.
+//! - **Cheap scan** (`scan_bounds`, default on): per photon a contiguous
+//!   [`pool::PathSummary`] (padded box of the path, open along its escape ray; instance
+//!   and material masks, exact for ≤ 64 of each) and [`pool::PathPoints`] (the first
+//!   vertices), so the exact tests read the scattered records only for long paths; the
+//!   flags equal the full scan's (tested). The coverage grid keeps its rays and re-traces
+//!   only those a change can affect (equal to a full recomputation, tested); coverage and
+//!   keys are computed only in priority order.
+//! - **Restart** (`restart_fraction`, default 0.5): when the scan flags more than this
+//!   fraction of the pool (a lamp moved: all of it), re-shooting each photon (removal,
+//!   addition, key) costs more than shooting the pool again, so the update restarts from
+//!   scratch (as `order = scratch`), reported as `restarted`.
 //! - **Animation**: frame `f + 1` updates frame `f`'s state with the changes between the
 //!   two frames, within a per-frame budget (`budget_fraction` of `Z` photons, and/or
 //!   `budget_ms`); leftover groups stay queued for the next frame (`groups_queued` in the
@@ -175,6 +188,16 @@ pub struct SptSettings {
     /// their groups). With `scan_paths = false` the pilots are the detector and are
     /// always traced. Default false.
     pub trace_pilots: bool,
+    /// Test each stored path's summary (box, instance and material masks: one contiguous
+    /// array) before reading its vertices in the path scan; `false`: the full test on
+    /// every stored path (the same flags, slower). Default true.
+    pub scan_bounds: bool,
+    /// When the path scan flags more than this fraction of the pool, the update restarts
+    /// from scratch (empty solution, the pool re-shot group by group in index order, as
+    /// `order = scratch` does) instead of re-shooting the flagged photons one by one
+    /// (each a removal, a new path and a key): reported as `restarted`. 1 = never.
+    /// Default 0.5.
+    pub restart_fraction: f64,
     /// Relative power difference at which a pilot's path counts as changed. Default 1e-4.
     pub path_tolerance: f32,
     /// Re-trace the whole pool after each update to count the pilots' misses (costly;
@@ -212,6 +235,8 @@ impl Default for SptSettings {
             scan_paths: true,
             reshoot: Reshoot::Photon,
             trace_pilots: false,
+            scan_bounds: true,
+            restart_fraction: 0.5,
             path_tolerance: 1e-4,
             audit: false,
             elements: 0.0,

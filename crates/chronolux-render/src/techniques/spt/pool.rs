@@ -107,6 +107,184 @@ impl PhotonRecord {
     }
 }
 
+/// What the path scan needs of a [`PhotonRecord`] to rule it out, kept beside the records
+/// in one contiguous array (the records' vertices are scattered over the heap): the box of
+/// every point the path can pass through and masks of the instances and materials of its
+/// vertices.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathSummary {
+    /// Box of the emission point and the vertices, padded by [`SUMMARY_PAD`], and open
+    /// towards infinity along each axis the escape ray (if any) goes.
+    pub lo: Vec3,
+    pub hi: Vec3,
+    /// Bit `i mod 64` for each vertex's instance `i`.
+    pub instances: u64,
+    /// Bit `m mod 64` for each vertex's material `m`.
+    pub materials: u64,
+    /// The emitting light (`NONE`: nothing emitted).
+    pub light: u32,
+    /// Vertices of the path (the points of its [`PathPoints`] when at most
+    /// [`PATH_POINTS`] − 1).
+    pub vertices: u32,
+}
+
+/// Points of a [`PathPoints`]: the emission point and the first `PATH_POINTS − 1`
+/// vertices (most paths have fewer: 2.3 vertices on average in the demo, 3.8 among the
+/// photons a localized change flags).
+pub const PATH_POINTS: usize = 5;
+
+/// The points of a stored path the segment test reads, beside the records in one
+/// contiguous array (read only for the paths whose [`PathSummary`] box meets a changed
+/// bound): the emission point, the first vertices and the escape direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathPoints {
+    pub p: [Vec3; PATH_POINTS],
+    pub escape: Vec3,
+}
+
+impl PathPoints {
+    pub fn of(rec: &PhotonRecord) -> PathPoints {
+        let mut p = [Vec3::ZERO; PATH_POINTS];
+        p[0] = rec.origin;
+        for (k, v) in rec.vertices.iter().take(PATH_POINTS - 1).enumerate() {
+            p[k + 1] = v.p;
+        }
+        PathPoints {
+            p,
+            escape: rec.escape,
+        }
+    }
+}
+
+/// [`PhotonRecord::crosses`] of the record summarised by `s` and `pts`, from them alone
+/// when the path has at most `PATH_POINTS − 1` vertices (the same segments and the same
+/// arithmetic, so the same answer), else from the record.
+#[inline]
+fn crosses_from(s: &PathSummary, pts: &PathPoints, rec: &PhotonRecord, boxes: &[Bounds3]) -> bool {
+    let n = s.vertices as usize;
+    if n >= PATH_POINTS {
+        return rec.crosses(boxes);
+    }
+    if s.light == NONE || boxes.is_empty() {
+        return false;
+    }
+    let mut a = pts.p[0];
+    for &v in &pts.p[1..=n] {
+        if boxes.iter().any(|b| segment_hits_box(a, v - a, 1.0, b)) {
+            return true;
+        }
+        a = v;
+    }
+    pts.escape != Vec3::ZERO
+        && boxes
+            .iter()
+            .any(|b| segment_hits_box(a, pts.escape, f32::INFINITY, b))
+}
+
+/// Padding of a [`PathSummary`]'s box: absolute 1e-4 plus 1e-5 of the coordinate. The
+/// exact segment test ([`segment_hits_box`]) rounds its slab distances in `f32`
+/// (relative error a few 1e-7), so it may report a crossing a hair outside the box; the
+/// padding, two orders of magnitude larger, keeps every such segment among the
+/// candidates (the box test must never rule out what the exact test accepts).
+pub const SUMMARY_PAD: (f32, f32) = (1e-4, 1e-5);
+
+impl PathSummary {
+    pub fn of(rec: &PhotonRecord) -> PathSummary {
+        let mut s = PathSummary {
+            lo: Vec3::splat(f32::INFINITY),
+            hi: Vec3::splat(f32::NEG_INFINITY),
+            instances: 0,
+            materials: 0,
+            light: rec.light,
+            vertices: rec.vertices.len() as u32,
+        };
+        if rec.light == NONE {
+            return s;
+        }
+        s.lo = rec.origin;
+        s.hi = rec.origin;
+        for v in &rec.vertices {
+            s.lo = s.lo.min(v.p);
+            s.hi = s.hi.max(v.p);
+            s.instances |= 1u64 << (v.instance % 64);
+            s.materials |= 1u64 << (v.material % 64);
+        }
+        let pad = |x: Vec3| Vec3::splat(SUMMARY_PAD.0) + x.abs() * SUMMARY_PAD.1;
+        let (plo, phi) = (pad(s.lo), pad(s.hi));
+        s.lo -= plo;
+        s.hi += phi;
+        let e = rec.escape;
+        for k in 0..3 {
+            if e[k] > 0.0 {
+                s.hi[k] = f32::INFINITY;
+            } else if e[k] < 0.0 {
+                s.lo[k] = f32::NEG_INFINITY;
+            } else if e[k].is_nan() {
+                s.lo[k] = f32::NEG_INFINITY;
+                s.hi[k] = f32::INFINITY;
+            }
+        }
+        s
+    }
+
+    /// The box meets one of `boxes` (closed intervals).
+    #[inline]
+    pub fn overlaps_any(&self, boxes: &[Bounds3]) -> bool {
+        boxes.iter().any(|b| {
+            self.lo.x <= b.max.x
+                && self.hi.x >= b.min.x
+                && self.lo.y <= b.max.y
+                && self.hi.y >= b.min.y
+                && self.lo.z <= b.max.z
+                && self.hi.z >= b.min.z
+        })
+    }
+}
+
+/// The changes of a [`FrameDelta`] as the [`PathSummary`] test reads them.
+pub struct ChangeMasks {
+    instances: u64,
+    materials: u64,
+    /// Per light: a path from it touches the change (its light changed, or the selection).
+    lights: Vec<bool>,
+    /// At most 64 instances and 64 materials: one bit each, so [`ChangeMasks::may_touch`]
+    /// is exactly [`PhotonRecord::touches`].
+    pub exact: bool,
+}
+
+impl ChangeMasks {
+    pub fn new(changes: &FrameDelta, scene: &FrameScene, selection_changed: bool) -> Self {
+        let mut m = ChangeMasks {
+            instances: 0,
+            materials: 0,
+            lights: (0..scene.lights.len())
+                .map(|l| selection_changed || changes.light_changed(l))
+                .collect(),
+            exact: scene.accel.instances().len() <= 64 && scene.materials.len() <= 64,
+        };
+        for i in 0..scene.accel.instances().len() {
+            if changes.instance_changed(i) {
+                m.instances |= 1u64 << (i % 64);
+            }
+        }
+        for k in 0..scene.materials.len() {
+            if changes.material_changed(k) {
+                m.materials |= 1u64 << (k % 64);
+            }
+        }
+        m
+    }
+
+    /// The path may [touch](PhotonRecord::touches) the change (never false when it does;
+    /// exactly whether it does when `exact`).
+    #[inline]
+    pub fn may_touch(&self, s: &PathSummary) -> bool {
+        (s.light != NONE && self.lights.get(s.light as usize).copied().unwrap_or(true))
+            || s.instances & self.instances != 0
+            || s.materials & self.materials != 0
+    }
+}
+
 /// Traces photon `i` in `scene` and records its path on `mesh`'s elements.
 pub fn trace_record(
     scene: &FrameScene,
@@ -341,6 +519,66 @@ pub struct UpdateStats {
     pub rays: u64,
     /// Wall-clock seconds.
     pub seconds: f64,
+    /// Photons the path scan flagged (possibly stale).
+    pub photons_flagged: u64,
+    /// Stored paths the scan read beyond their [`PathSummary`] (all of them with
+    /// `scan_bounds = false`).
+    pub scan_candidates: u64,
+    /// Coverage rays traced again (of `COVERAGE_GRID²`; 0 when all were, or none needed).
+    pub coverage_rays_traced: u64,
+    /// The update restarted from scratch: the scan flagged more than `restart_fraction`
+    /// of the pool, or scratch order.
+    pub restarted: bool,
+    /// Where the time went.
+    pub phases: Phases,
+}
+
+/// The clock [`Phases`] are timed with (seconds from any origin), set at most once per
+/// process ([`set_phase_clock`]); default wall-clock.
+static PHASE_CLOCK: std::sync::OnceLock<fn() -> f64> = std::sync::OnceLock::new();
+
+/// Times [`Phases`] with `clock` from now on (e.g. a CPU clock: `chronolux bench update`
+/// sets the process CPU clock, which the workspace's no-unsafe rule keeps out of this
+/// crate). False if a clock was set already.
+pub fn set_phase_clock(clock: fn() -> f64) -> bool {
+    PHASE_CLOCK.set(clock).is_ok()
+}
+
+fn phase_clock() -> f64 {
+    match PHASE_CLOCK.get() {
+        Some(c) => c(),
+        None => {
+            static START: std::sync::OnceLock<Instant> = std::sync::OnceLock::new();
+            START.get_or_init(Instant::now).elapsed().as_secs_f64()
+        }
+    }
+}
+
+/// Seconds of an update's phases, on the clock of [`set_phase_clock`] (wall-clock unless
+/// set): what `chronolux bench update` reports (with the process CPU clock) to find the
+/// fixed costs of an update.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct Phases {
+    /// Screen coverage of the element sides (priority order's weights).
+    pub coverage: f64,
+    /// The scan of the stored paths.
+    pub scan: f64,
+    /// Order keys of the flagged photons or groups, and sorting the queue.
+    pub keys: f64,
+    /// Tracing re-shot photons (and pilots).
+    pub trace: f64,
+    /// Removing old deposits, adding the new ones, storing the records.
+    pub apply: f64,
+}
+
+impl std::ops::AddAssign<&Phases> for Phases {
+    fn add_assign(&mut self, o: &Phases) {
+        self.coverage += o.coverage;
+        self.scan += o.scan;
+        self.keys += o.keys;
+        self.trace += o.trace;
+        self.apply += o.apply;
+    }
 }
 
 impl std::ops::AddAssign<&UpdateStats> for UpdateStats {
@@ -354,6 +592,11 @@ impl std::ops::AddAssign<&UpdateStats> for UpdateStats {
         self.photons_traced += o.photons_traced;
         self.rays += o.rays;
         self.seconds += o.seconds;
+        self.photons_flagged += o.photons_flagged;
+        self.scan_candidates += o.scan_candidates;
+        self.coverage_rays_traced += o.coverage_rays_traced;
+        self.restarted |= o.restarted;
+        self.phases += &o.phases;
     }
 }
 
@@ -393,6 +636,9 @@ pub struct SptState {
     scene: Arc<FrameScene>,
     /// Photon `i`'s last path (`i < Z`).
     records: Vec<PhotonRecord>,
+    /// Photon `i`'s [`PathSummary`] and [`PathPoints`] (of `records[i]`).
+    summaries: Vec<PathSummary>,
+    points: Vec<PathPoints>,
     pub solution: Solution,
     /// Per group: its photons are in the solution (false only while a scratch restart
     /// has not reached it).
@@ -423,6 +669,12 @@ pub struct SptState {
     epoch: u64,
     /// Screen coverage of each element side (pixels of the coverage grid).
     coverage: Vec<f32>,
+    /// The coverage grid's rays in the scene `coverage` was last brought up to date in
+    /// (empty: never).
+    coverage_rays: Vec<CoverageRay>,
+    /// A scratch restart (`restart_fraction`) is being drained: the queue holds groups,
+    /// whatever [`SptSettings::per_photon`] says.
+    restarting: bool,
 }
 
 impl SptState {
@@ -450,6 +702,18 @@ impl SptState {
             .clamp(1, layout.members);
         let indices: Vec<u64> = (0..n).collect();
         let (records, _) = trace_records(&scene, &mesh, &indices, settings.common.seed);
+        let summaries = parallel::map_chunks(records.len(), 8192, |r| {
+            records[r].iter().map(PathSummary::of).collect::<Vec<_>>()
+        })
+        .into_iter()
+        .flatten()
+        .collect();
+        let points = parallel::map_chunks(records.len(), 8192, |r| {
+            records[r].iter().map(PathPoints::of).collect::<Vec<_>>()
+        })
+        .into_iter()
+        .flatten()
+        .collect();
         let mut solution = Solution::new(mesh.element_count());
         for r in &records {
             solution.apply(r, 1.0);
@@ -462,6 +726,8 @@ impl SptState {
             mesh,
             scene,
             records,
+            summaries,
+            points,
             solution,
             in_solution: vec![true; g],
             photons_in_solution: n,
@@ -476,12 +742,42 @@ impl SptState {
             queue: Vec::new(),
             epoch: 0,
             coverage,
+            coverage_rays: Vec::new(),
+            restarting: false,
         };
         if s.settings.per_photon() {
             s.pkey = vec![0.0; n as usize];
         }
-        s.coverage = screen_coverage(&s.scene, &s.mesh, COVERAGE_GRID);
+        if s.settings.order == Order::Priority {
+            s.coverage_rays = coverage_rays(&s.scene, &s.mesh, COVERAGE_GRID);
+            s.coverage = coverage_from_rays(&s.coverage_rays, s.mesh.element_count());
+        }
         s
+    }
+
+    /// Stores `rec` as photon `i`'s path (and its summary).
+    #[inline]
+    fn store(&mut self, i: usize, rec: PhotonRecord) {
+        self.summaries[i] = PathSummary::of(&rec);
+        self.points[i] = PathPoints::of(&rec);
+        self.records[i] = rec;
+    }
+
+    /// Whether the queue holds single photons: [`SptSettings::per_photon`], except during
+    /// a scratch restart.
+    fn photon_queue(&self) -> bool {
+        self.settings.per_photon() && !self.restarting
+    }
+
+    /// Photon `i` is flagged: found possibly stale by the path scan and not yet re-shot.
+    pub fn flagged(&self, i: u64) -> bool {
+        self.flagged[i as usize]
+    }
+
+    /// The screen coverage of each element side the priority keys weigh by (pixels of the
+    /// `COVERAGE_GRID²` grid; zeros in orders that need no keys).
+    pub fn coverage(&self) -> &[f32] {
+        &self.coverage
     }
 
     /// The scene the solution is (being brought) up to date with.
@@ -492,7 +788,7 @@ impl SptState {
     /// Groups waiting to be re-shot (with [`SptSettings::per_photon`]: groups with a
     /// photon waiting).
     pub fn queue_len(&self) -> usize {
-        if self.settings.per_photon() {
+        if self.photon_queue() {
             self.queued_groups as usize
         } else {
             self.queue.len()
@@ -503,7 +799,7 @@ impl SptState {
     /// [`SptSettings::per_photon`], else the members of the queued groups that their
     /// re-shooting will trace.
     pub fn queued_photons(&self) -> u64 {
-        if self.settings.per_photon() {
+        if self.photon_queue() {
             return self.queue.len() as u64;
         }
         let only_flagged =
@@ -565,34 +861,33 @@ impl SptState {
             .any(|l| scene.light_sampler.pmf(l) != self.scene.light_sampler.pmf(l));
         self.scene = scene;
         self.epoch += 1;
-        self.coverage = screen_coverage(&self.scene, &self.mesh, COVERAGE_GRID);
         let mut st = UpdateStats::default();
         let groups = self.layout.groups;
-        if self.settings.order == Order::Scratch {
-            // Recomputation from scratch: empty solution, every group queued in index
-            // order (the key makes group 0 come first).
-            self.solution = Solution::new(self.mesh.element_count());
-            self.in_solution.iter_mut().for_each(|b| *b = false);
-            self.photons_in_solution = 0;
-            self.pilots_current = false;
-            for g in 0..groups as usize {
-                self.queued[g] = true;
-                self.key[g] = -(g as f64);
-            }
-            st.groups_invalidated = groups;
+        // Only priority order reads the keys, and so the screen coverage they weigh by.
+        let keyed = self.settings.order == Order::Priority;
+        if self.settings.order == Order::Scratch || self.restarting {
+            // Recomputation from scratch (or a change during a scratch restart: it starts
+            // over, as scratch order does).
+            self.restart(&mut st);
         } else if !changes.is_static() {
             let tol = self.settings.path_tolerance;
             let mut change = vec![0.0f64; groups as usize];
-            let phi0 = self.flux_floor();
+            let phi0 = if keyed { self.flux_floor() } else { 0.0 };
             let mut invalid = vec![false; groups as usize];
             let use_pilots = self.settings.uses_pilots();
             if use_pilots {
+                if keyed {
+                    self.update_coverage(changes, &mut st);
+                }
+                let t = phase_clock();
                 let pilots: Vec<u64> = (0..groups)
                     .flat_map(|g| (0..self.pilots).map(move |m| (g, m)))
                     .map(|(g, m)| self.layout.photon(g, m))
                     .collect();
                 let (new, ps) =
                     trace_records(&self.scene, &self.mesh, &pilots, self.settings.common.seed);
+                st.phases.trace += phase_clock() - t;
+                let t = phase_clock();
                 st.pilots_traced = pilots.len() as u64;
                 st.photons_traced += pilots.len() as u64;
                 st.rays += ps.rays;
@@ -606,7 +901,7 @@ impl SptState {
                     {
                         invalid[g] = true;
                     }
-                    if differs {
+                    if differs && keyed {
                         change[g] += self.perceived_change(old, &rec, phi0);
                     }
                     if *old != rec {
@@ -616,45 +911,63 @@ impl SptState {
                             self.solution.apply(old, -1.0);
                             self.solution.apply(&rec, 1.0);
                         }
-                        self.records[i as usize] = rec;
+                        self.store(i as usize, rec);
                     }
                 }
+                st.phases.apply += phase_clock() - t;
                 self.pilots_current = true;
                 st.groups_by_pilots = invalid.iter().filter(|&&b| b).count() as u64;
             } else {
                 // No pilots: they are re-shot like any other photon (the scan covers them).
                 self.pilots_current = false;
             }
-            let per_photon = self.settings.per_photon();
+            let per_photon = self.photon_queue();
             if self.settings.scan_paths {
                 // Every stored path that touched a change, or whose segments cross the
                 // new bounds of a changed instance, is (possibly) stale: its group goes
                 // into the queue too, with the change its removal makes as its weight.
                 // `changes` is from the pool's previous scene to `self.scene` (frame 1).
-                let boxes = changes.changed_bounds_in(1);
-                let z = self.records.len();
+                let t = phase_clock();
                 // Pilots are current already when traced above.
                 let first_non_pilot = if use_pilots {
                     (self.pilots * groups) as usize
                 } else {
                     0
                 };
-                let hits = parallel::map_chunks(z, 4096, |r| {
-                    r.filter(|&i| {
-                        let rec = &self.records[i];
-                        i >= first_non_pilot
-                            && (rec.touches(changes, selection_changed) || rec.crosses(&boxes))
-                    })
-                    .collect::<Vec<usize>>()
-                });
-                let empty = PhotonRecord::default();
-                for i in hits.into_iter().flatten() {
+                let (hits, candidates) = self.scan(changes, selection_changed, first_non_pilot);
+                st.scan_candidates = candidates;
+                st.photons_flagged = hits.len() as u64;
+                st.phases.scan += phase_clock() - t;
+                let z = self.records.len() as f64;
+                if hits.len() as f64 > self.settings.restart_fraction * z {
+                    // Nearly every photon is flagged: re-shooting them one by one (remove,
+                    // add, keys, queue) costs more than shooting the pool again.
+                    self.restart(&mut st);
+                    self.sort_queue();
+                    st.groups_queued = self.queue.len() as u64;
+                    st.seconds = t0.elapsed().as_secs_f64();
+                    return st;
+                }
+                if keyed && !use_pilots {
+                    self.update_coverage(changes, &mut st);
+                }
+                let t = phase_clock();
+                let w = if keyed {
+                    self.side_weights(phi0)
+                } else {
+                    Vec::new()
+                };
+                for i in hits {
                     let g = i % groups as usize;
                     if !invalid[g] {
                         invalid[g] = true;
                         st.groups_by_scan += 1;
                     }
-                    let c = self.perceived_change(&self.records[i], &empty, phi0);
+                    let c = if keyed {
+                        removal_change(&self.records[i], &w)
+                    } else {
+                        0.0
+                    };
                     if per_photon {
                         let k = match self.settings.order {
                             Order::Random => self.random_key(i as u64, 0x0050_4854),
@@ -666,7 +979,9 @@ impl SptState {
                     }
                     change[g] += c;
                 }
+                st.phases.keys += phase_clock() - t;
             }
+            let t = phase_clock();
             for g in 0..groups as usize {
                 if !invalid[g] {
                     continue;
@@ -698,11 +1013,139 @@ impl SptState {
                     self.key[g] = k;
                 }
             }
+            st.phases.keys += phase_clock() - t;
         }
+        let t = phase_clock();
         self.sort_queue();
-        st.groups_queued = self.queue.len() as u64;
+        st.phases.keys += phase_clock() - t;
+        st.groups_queued = self.queue_len() as u64;
         st.seconds = t0.elapsed().as_secs_f64();
         st
+    }
+
+    /// Starts a recomputation from scratch: empty solution, every group queued in index
+    /// order (the key makes group 0 come first), re-shot whole by the group drain; any
+    /// photon queued before is dropped from the queue (the restart re-shoots it anyway).
+    fn restart(&mut self, st: &mut UpdateStats) {
+        let groups = self.layout.groups;
+        self.solution = Solution::new(self.mesh.element_count());
+        self.in_solution.iter_mut().for_each(|b| *b = false);
+        self.photons_in_solution = 0;
+        self.pilots_current = false;
+        self.flagged.iter_mut().for_each(|b| *b = false);
+        self.pending.iter_mut().for_each(|p| *p = 0);
+        self.queued_groups = 0;
+        for g in 0..groups as usize {
+            self.queued[g] = true;
+            self.key[g] = -(g as f64);
+        }
+        self.restarting = self.settings.order != Order::Scratch;
+        st.restarted = true;
+        st.groups_invalidated = groups;
+    }
+
+    /// The path scan: the photons (from `first` on) whose stored path touches `changes` or
+    /// crosses the new bounds of a changed instance, in index order, and how many paths
+    /// passed the summary test (all of them with `scan_bounds = false`).
+    ///
+    /// With `scan_bounds` each path's [`PathSummary`] is tested first, from one contiguous
+    /// array: a path whose instance and material masks miss every changed one and whose
+    /// (padded) box overlaps no changed bound can neither touch nor cross the change; with
+    /// at most 64 instances and materials the masks answer `touches` exactly. Only the
+    /// paths whose box meets a changed bound (`candidates`) go on to the exact segment
+    /// test, on their [`PathPoints`] (another contiguous array; the scattered record only
+    /// for paths of more than `PATH_POINTS − 1` vertices) — the flags are those of the
+    /// full scan (tested against it).
+    fn scan(
+        &self,
+        changes: &FrameDelta,
+        selection_changed: bool,
+        first: usize,
+    ) -> (Vec<usize>, u64) {
+        let boxes = changes.changed_bounds_in(1);
+        let z = self.records.len();
+        let cull = self.settings.scan_bounds;
+        let masks = ChangeMasks::new(changes, &self.scene, selection_changed);
+        let chunks = parallel::map_chunks(z, 8192, |r| {
+            let mut candidates = 0u64;
+            let hits = r
+                .filter(|&i| {
+                    if i < first {
+                        return false;
+                    }
+                    if !cull {
+                        candidates += 1;
+                        let rec = &self.records[i];
+                        return rec.touches(changes, selection_changed) || rec.crosses(&boxes);
+                    }
+                    let s = &self.summaries[i];
+                    let may_touch = masks.may_touch(s);
+                    if may_touch && masks.exact {
+                        return true;
+                    }
+                    let may_cross = s.overlaps_any(&boxes);
+                    if !(may_touch || may_cross) {
+                        return false;
+                    }
+                    candidates += 1;
+                    let rec = &self.records[i];
+                    (may_touch && rec.touches(changes, selection_changed))
+                        || (may_cross && crosses_from(s, &self.points[i], rec, &boxes))
+                })
+                .collect::<Vec<usize>>();
+            (hits, candidates)
+        });
+        let mut hits = Vec::new();
+        let mut candidates = 0;
+        for (h, c) in chunks {
+            hits.extend(h);
+            candidates += c;
+        }
+        (hits, candidates)
+    }
+
+    /// Brings the screen coverage of the element sides to the current scene. Only the
+    /// coverage rays the change can affect are traced again: all of them when the camera
+    /// changed, else those whose stored first hit lies on a changed instance or whose
+    /// segment from the camera to it (the whole ray when it escaped) crosses the new bounds
+    /// of a changed instance — a ray that does neither hits what it hit before (a new
+    /// first hit would be on a changed instance, inside its new bounds, nearer than the
+    /// old one); all of them also when a material changed. The result equals a full
+    /// [`screen_coverage`] (tested).
+    fn update_coverage(&mut self, changes: &FrameDelta, st: &mut UpdateStats) {
+        let t = phase_clock();
+        // A material change may change what a ray hits (alpha masks): everything again.
+        if changes.camera_changed() || changes.materials_changed() || self.coverage_rays.is_empty()
+        {
+            self.coverage_rays = coverage_rays(&self.scene, &self.mesh, COVERAGE_GRID);
+        } else {
+            let boxes = changes.changed_bounds_in(1);
+            let scene = &self.scene;
+            let mesh = &self.mesh;
+            let n = COVERAGE_GRID;
+            let rays = &self.coverage_rays;
+            let redo: Vec<usize> = (0..rays.len())
+                .filter(|&k| {
+                    let c = &rays[k];
+                    (c.instance != NONE && changes.instance_changed(c.instance as usize)) || {
+                        let ray = coverage_ray(scene, n, k);
+                        boxes.iter().any(|b| segment_hits_box(ray.o, ray.d, c.t, b))
+                    }
+                })
+                .collect();
+            let fresh = parallel::map_chunks(redo.len(), 64, |r| {
+                redo[r]
+                    .iter()
+                    .map(|&k| trace_coverage_ray(scene, mesh, n, k))
+                    .collect::<Vec<_>>()
+            });
+            for (&k, c) in redo.iter().zip(fresh.into_iter().flatten()) {
+                self.coverage_rays[k] = c;
+            }
+            st.coverage_rays_traced = redo.len() as u64;
+        }
+        self.coverage = coverage_from_rays(&self.coverage_rays, self.mesh.element_count());
+        st.phases.coverage += phase_clock() - t;
     }
 
     /// A random order key for photon or group `i` in this epoch (`tag` tells the uses apart).
@@ -755,6 +1198,20 @@ impl SptState {
         out
     }
 
+    /// Per element side, the factor of [`Self::perceived_change`] by which a deposit's
+    /// luminance counts: `(c + c₀) / (Φ + Φ₀)` (for the keys of the path scan, where the
+    /// solution does not change between keys: one read per deposit instead of the four
+    /// of the side's sums and coverage).
+    fn side_weights(&self, phi0: f64) -> Vec<f64> {
+        let sol = &self.solution;
+        (0..sol.direct.flux.len())
+            .map(|k| {
+                let total = sol.direct.lum(k) + sol.indirect.lum(k) + sol.caustic.lum(k);
+                (self.coverage[k] as f64 + 0.1) / (total.max(0.0) + phi0)
+            })
+            .collect()
+    }
+
     /// `Φ₀` of [`Self::perceived_change`]: 1 % of the mean flux sum per element side.
     fn flux_floor(&self) -> f64 {
         let s = &self.solution;
@@ -769,7 +1226,7 @@ impl SptState {
     /// with a fresh random key in random order) whatever their pilots say: for a caller
     /// that knows better (a viewer's "refresh", tests).
     pub fn requeue(&mut self, groups: impl IntoIterator<Item = u64>) {
-        if self.settings.per_photon() {
+        if self.photon_queue() {
             for g in groups {
                 for m in 0..self.layout.members {
                     let i = self.layout.photon(g, m);
@@ -805,7 +1262,7 @@ impl SptState {
     }
 
     fn sort_queue(&mut self) {
-        if self.settings.per_photon() {
+        if self.photon_queue() {
             self.queue = (0..self.flagged.len() as u32)
                 .filter(|&i| self.flagged[i as usize])
                 .collect();
@@ -826,7 +1283,7 @@ impl SptState {
     /// (photons of a batch of groups are traced in parallel and applied in queue order,
     /// so the result does not depend on the thread count).
     pub fn drain(&mut self, budget: Budget) -> UpdateStats {
-        if self.settings.per_photon() {
+        if self.photon_queue() {
             return self.drain_photons(budget);
         }
         let t0 = Instant::now();
@@ -871,8 +1328,11 @@ impl SptState {
             if groups.is_empty() {
                 break;
             }
+            let t = phase_clock();
             let (recs, ps) =
                 trace_records(&self.scene, &self.mesh, &indices, self.settings.common.seed);
+            st.phases.trace += phase_clock() - t;
+            let t = phase_clock();
             st.rays += ps.rays;
             st.photons_traced += indices.len() as u64;
             for (&i, rec) in indices.iter().zip(recs) {
@@ -881,7 +1341,7 @@ impl SptState {
                     self.solution.apply(&self.records[i as usize], -1.0);
                 }
                 self.solution.apply(&rec, 1.0);
-                self.records[i as usize] = rec;
+                self.store(i as usize, rec);
                 self.flagged[i as usize] = false;
             }
             for &g in &groups {
@@ -896,9 +1356,13 @@ impl SptState {
                 self.key[g] = 0.0;
             }
             st.groups_reshot += groups.len() as u64;
+            st.phases.apply += phase_clock() - t;
         }
         if self.queue.is_empty() && !self.pilots_current {
             self.pilots_current = true;
+        }
+        if self.queue.is_empty() {
+            self.restarting = false;
         }
         st.groups_queued = self.queue.len() as u64;
         st.seconds = t0.elapsed().as_secs_f64();
@@ -929,15 +1393,18 @@ impl SptState {
             let indices: Vec<u64> = (0..take)
                 .map(|_| self.queue.pop().expect("queue holds `take` photons") as u64)
                 .collect();
+            let t = phase_clock();
             let (recs, ps) =
                 trace_records(&self.scene, &self.mesh, &indices, self.settings.common.seed);
+            st.phases.trace += phase_clock() - t;
+            let t = phase_clock();
             st.rays += ps.rays;
             st.photons_traced += indices.len() as u64;
             for (&i, rec) in indices.iter().zip(recs) {
                 let i = i as usize;
                 self.solution.apply(&self.records[i], -1.0);
                 self.solution.apply(&rec, 1.0);
-                self.records[i] = rec;
+                self.store(i, rec);
                 self.flagged[i] = false;
                 let g = i % n_groups;
                 self.pending[g] -= 1;
@@ -947,6 +1414,7 @@ impl SptState {
                     st.groups_reshot += 1;
                 }
             }
+            st.phases.apply += phase_clock() - t;
         }
         if self.queue.is_empty() && !self.pilots_current {
             self.pilots_current = true;
@@ -1012,32 +1480,84 @@ impl SptState {
     }
 }
 
+/// One primary ray of the coverage grid: the element side it hits first, the instance
+/// and the distance (`NONE` and infinity when it leaves the scene).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoverageRay {
+    pub slot: u32,
+    pub instance: u32,
+    pub t: f32,
+}
+
+/// Ray `k` (row-major) of the `n × n` coverage grid through pixel centres of `scene`'s
+/// camera.
+fn coverage_ray(scene: &FrameScene, n: u32, k: usize) -> chronolux_core::geometry::Ray {
+    let cam = &scene.camera;
+    let (x, y) = ((k as u32) % n, (k as u32) / n);
+    let raster = Vec2::new(
+        (x as f32 + 0.5) / n as f32 * cam.width as f32,
+        (y as f32 + 0.5) / n as f32 * cam.height as f32,
+    );
+    cam.generate_ray(raster)
+}
+
+/// Traces ray `k` of the coverage grid.
+fn trace_coverage_ray(scene: &FrameScene, mesh: &ElementMesh, n: u32, k: usize) -> CoverageRay {
+    let ray = coverage_ray(scene, n, k);
+    match scene.intersect(&ray) {
+        Some(h) => {
+            let si = scene.interaction(&h, &ray);
+            let e = mesh.locate(h.tri, h.b1, h.b2).element;
+            CoverageRay {
+                slot: slot(e, -ray.d.dot(si.ng) >= 0.0) as u32,
+                instance: h.instance,
+                t: h.t,
+            }
+        }
+        None => CoverageRay {
+            slot: NONE,
+            instance: NONE,
+            t: f32::INFINITY,
+        },
+    }
+}
+
+/// Every ray of the `n × n` coverage grid, row-major.
+pub fn coverage_rays(scene: &FrameScene, mesh: &ElementMesh, n: u32) -> Vec<CoverageRay> {
+    let total = (n * n) as usize;
+    parallel::map_chunks(total, 4 * n as usize, |r| {
+        r.map(|k| trace_coverage_ray(scene, mesh, n, k))
+            .collect::<Vec<_>>()
+    })
+    .into_iter()
+    .flatten()
+    .collect()
+}
+
+/// Per element side (indexed by [`slot`]): the coverage rays whose first hit is on it.
+fn coverage_from_rays(rays: &[CoverageRay], elements: usize) -> Vec<f32> {
+    let mut c = vec![0.0f32; 2 * elements];
+    for r in rays {
+        if r.slot != NONE {
+            c[r.slot as usize] += 1.0;
+        }
+    }
+    c
+}
+
+/// The perceived change of removing path `rec` ([`SptState::perceived_change`] against an
+/// empty path), with the per-side weights `w` of [`SptState::side_weights`].
+fn removal_change(rec: &PhotonRecord, w: &[f64]) -> f64 {
+    rec.vertices
+        .iter()
+        .filter(|v| v.slot != NONE && v.kind != DIRECT)
+        .map(|v| luminance(v.power) as f64 * w[v.slot as usize])
+        .sum()
+}
+
 /// Screen coverage of each element side of `mesh` (indexed by [`slot`]): an `n × n` grid of
 /// primary rays through pixel centres of `scene`'s camera, counted on the side each hits
 /// first.
 pub fn screen_coverage(scene: &FrameScene, mesh: &ElementMesh, n: u32) -> Vec<f32> {
-    let cam = &scene.camera;
-    let rows = parallel::map_chunks(n as usize, 4, |r| {
-        let mut hits = Vec::new();
-        for y in r {
-            for x in 0..n {
-                let raster = Vec2::new(
-                    (x as f32 + 0.5) / n as f32 * cam.width as f32,
-                    (y as f32 + 0.5) / n as f32 * cam.height as f32,
-                );
-                let ray = cam.generate_ray(raster);
-                if let Some(h) = scene.intersect(&ray) {
-                    let si = scene.interaction(&h, &ray);
-                    let e = mesh.locate(h.tri, h.b1, h.b2).element;
-                    hits.push(slot(e, -ray.d.dot(si.ng) >= 0.0));
-                }
-            }
-        }
-        hits
-    });
-    let mut c = vec![0.0f32; 2 * mesh.element_count()];
-    for s in rows.into_iter().flatten() {
-        c[s] += 1.0;
-    }
-    c
+    coverage_from_rays(&coverage_rays(scene, mesh, n), mesh.element_count())
 }

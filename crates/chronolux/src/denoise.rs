@@ -169,8 +169,8 @@ pub fn light_channels(
 
 /// The run-time binding to Open Image Denoise: the library, one CPU device and one
 /// filter, found and created once per process.
-// Unsafe code (with `bench_update`'s CPU clock, the crate's only other): calls into OIDN's C API through a library loaded at
-// run time. Each call's contract is OIDN 2's (oidn.h): handles come from the same
+// Unsafe code (besides `bench_update`'s CPU clock, the crate's only one): calls into
+// OIDN's C API through a library loaded at run time. Each call's contract is OIDN 2's (oidn.h): handles come from the same
 // device, shared images stay alive and unaliased until `oidnExecuteFilter` returns (they
 // are borrowed for the whole call here), and every use of the device and filter is under
 // one mutex, as OIDN asks of a device shared between threads.

@@ -10,7 +10,8 @@
 //!   set is traced twice: one call per ray (how the kernels trace today) and in packets of
 //!   16 (`intersect_many` / `occluded_many`: Embree's packet kernels, the way Mitsuba's
 //!   wavefront traces the same rays). The backend (Embree or the own BVH,
-//!   `CHRONOLUX_ACCEL=bvh`) is named in the output.
+//!   `CHRONOLUX_ACCEL=bvh`) is named in the output. Each query is timed in wall and in
+//!   process CPU seconds, after one untimed pass; compare CPU seconds on a shared machine.
 //! - `bench build`: BVH build seconds (the frame builder's persistent BLASes, one frame,
 //!   and one flat BLAS over all world-space triangles).
 //! - `bench pt`: path-traced samples per second, excluding scene loading and frame building.
@@ -324,10 +325,39 @@ fn ray_sets(scene: &FrameScene, tris: &[(TriRef, [Vec3; 3])], n: usize) -> [Vec<
     [hemi, boxed]
 }
 
-/// Traces all rays; returns (seconds, hits, Σt over hits). `packets`: through
-/// `FrameScene::intersect_many` / `occluded_many` (16-ray packets on Embree), as a
-/// wavefront kernel would issue them, instead of one call per ray.
-fn trace(scene: &FrameScene, rays: &[Ray], shadow: bool, packets: bool) -> (f64, u64, f64) {
+/// CPU seconds of this process: the sum over its threads of the scheduler's run time
+/// (`/proc/self/task/*/schedstat`, nanoseconds), else `/proc/self/stat`'s 10 ms ticks. The
+/// ray sets take tens of milliseconds, too short for ticks; on a shared machine wall time
+/// counts the other sessions' load, CPU time only ours (and Mitsuba's side is timed the
+/// same way, `scripts/peer/mitsuba_rays.py`).
+fn process_cpu_seconds() -> f64 {
+    let precise = || -> Option<f64> {
+        let mut ns = 0u64;
+        for t in std::fs::read_dir("/proc/self/task").ok()? {
+            let s = std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok()?;
+            ns += s.split_whitespace().next()?.parse::<u64>().ok()?;
+        }
+        Some(ns as f64 * 1e-9)
+    };
+    precise()
+        .or_else(chronolux_render::framework::run::cpu_seconds)
+        .unwrap_or(f64::NAN)
+}
+
+/// One traced set: wall and process CPU seconds, hits, Σt over hits.
+struct Traced {
+    wall_s: f64,
+    cpu_s: f64,
+    hits: u64,
+    sum_t: f64,
+}
+
+/// Traces all rays. `packets`: through `FrameScene::intersect_many` / `occluded_many`
+/// (16-ray packets on Embree), as a wavefront kernel would issue them, instead of one call
+/// per ray. The timed part is the queries and the per-ray conversions of our interface
+/// (ray to Embree's layout, hit back), as a kernel pays them; the rays are made before.
+fn trace(scene: &FrameScene, rays: &[Ray], shadow: bool, packets: bool) -> Traced {
+    let cpu0 = process_cpu_seconds();
     let start = Instant::now();
     let (hits, sum_t) = rays
         .par_chunks(4096)
@@ -358,7 +388,12 @@ fn trace(scene: &FrameScene, rays: &[Ray], shadow: bool, packets: bool) -> (f64,
             (hits, sum_t)
         })
         .reduce(|| (0, 0.0), |a, b| (a.0 + b.0, a.1 + b.1));
-    (start.elapsed().as_secs_f64(), hits, sum_t)
+    Traced {
+        wall_s: start.elapsed().as_secs_f64(),
+        cpu_s: process_cpu_seconds() - cpu0,
+        hits,
+        sum_t,
+    }
 }
 
 /// Build timings of one target: the frame builder's persistent structures (static BLAS,
@@ -412,14 +447,22 @@ fn rays(a: RaysArgs) -> Result<()> {
         // Per (set, kind): seconds of each round, hits, Σt.
         // Kinds: closest, shadow, closest in packets, shadow in packets.
         let mut secs: [[Vec<f64>; 4]; 2] = Default::default();
+        let mut cpu: [[Vec<f64>; 4]; 2] = Default::default();
         let mut counts = [[(0u64, 0f64); 4]; 2];
+        // One untimed pass over every set and kind first (page faults of the outputs,
+        // thread-pool start-up), as Mitsuba's side makes one untimed call per query.
+        for rays in &sets {
+            for kind in 0..4 {
+                pool.install(|| trace(&scene, rays, kind % 2 == 1, kind >= 2));
+            }
+        }
         for _ in 0..tg.rounds.max(1) {
             for (s, rays) in sets.iter().enumerate() {
                 for kind in 0..4 {
-                    let (dt, hits, sum_t) =
-                        pool.install(|| trace(&scene, rays, kind % 2 == 1, kind >= 2));
-                    secs[s][kind].push(dt);
-                    counts[s][kind] = (hits, sum_t);
+                    let r = pool.install(|| trace(&scene, rays, kind % 2 == 1, kind >= 2));
+                    secs[s][kind].push(r.wall_s);
+                    cpu[s][kind].push(r.cpu_s);
+                    counts[s][kind] = (r.hits, r.sum_t);
                 }
             }
         }
@@ -431,7 +474,9 @@ fn rays(a: RaysArgs) -> Result<()> {
                 json!({
                     "mrays_per_s_median": n / median(&secs[s][kind]) / 1e6,
                     "mrays_per_s_best": n / best(&secs[s][kind]) / 1e6,
+                    "mrays_per_cpu_s_median": n / median(&cpu[s][kind]) / 1e6,
                     "seconds": secs[s][kind],
+                    "cpu_seconds": cpu[s][kind],
                     "hits": hits,
                     "hit_fraction": hits as f64 / n,
                     "sum_t": if kind.is_multiple_of(2) { json!(sum_t) } else { Value::Null },
@@ -510,9 +555,10 @@ fn rays(a: RaysArgs) -> Result<()> {
             for kind in ["closest", "shadow", "closest_packets", "shadow_packets"] {
                 let r = &s["sets"][name][kind];
                 println!(
-                    "  {name:>4} {kind:<15} {:7.3} Mrays/s ({:.3})  hits {:.1}%",
+                    "  {name:>4} {kind:<15} {:7.3} Mrays/s ({:.3}), {:7.3} M per CPU s  hits {:.1}%",
                     r["mrays_per_s_median"].as_f64().unwrap_or(f64::NAN),
                     r["mrays_per_s_best"].as_f64().unwrap_or(f64::NAN),
+                    r["mrays_per_cpu_s_median"].as_f64().unwrap_or(f64::NAN),
                     100.0 * r["hit_fraction"].as_f64().unwrap_or(f64::NAN),
                 );
             }

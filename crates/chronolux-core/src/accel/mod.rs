@@ -801,6 +801,79 @@ mod tests {
 mod tiny_tests {
     use super::*;
 
+    /// Rays are the open interval `0 < t < tmax` on both backends: a triangle through the
+    /// origin (t = 0 exactly) is not hit, by single rays or packets, and one at t = 1 is.
+    /// Embree is given `tnear = 0` (its test `tnear·|den| < T` is strict), the own BVH tests
+    /// `t > 0`. Checked through a lone BLAS and through two instances (on Embree the flat
+    /// scene of world-space triangles), one of them moved.
+    #[test]
+    fn a_triangle_through_the_origin_is_not_hit_at_t_zero() {
+        let tri = |z: f32, k: u32| {
+            (
+                TriRef {
+                    geometry: 0,
+                    triangle: k,
+                },
+                [
+                    Vec3::new(-1.0, -1.0, z),
+                    Vec3::new(2.0, -1.0, z),
+                    Vec3::new(-1.0, 2.0, z),
+                ],
+            )
+        };
+        for own in [false, true] {
+            let build = |items: &[(TriRef, [Vec3; 3])]| {
+                Arc::new(if own {
+                    Blas::build_own(items, false)
+                } else {
+                    Blas::build(items, false)
+                })
+            };
+            let lone = Accel::new(vec![Instance::new(
+                build(&[tri(0.0, 0), tri(1.0, 1)]),
+                Affine3A::IDENTITY,
+            )]);
+            // The second instance is the plane z = 0 moved to z = 1.
+            let moved = Accel::new(vec![
+                Instance::new(build(&[tri(0.0, 0)]), Affine3A::IDENTITY),
+                Instance::new(
+                    build(&[tri(0.0, 0)]),
+                    Affine3A::from_translation(Vec3::new(0.0, 0.0, 1.0)),
+                )
+                .with_geometry_base(1),
+            ]);
+            for (name, accel) in [("lone", &lone), ("moved", &moved)] {
+                // Origins on the plane z = 0 (exactly representable, so t = 0 exactly).
+                let rays: Vec<Ray> = [(0.1, 0.1), (0.0, 0.0), (0.5, -0.25), (-0.5, 0.75)]
+                    .iter()
+                    .map(|&(x, y)| Ray::new(Vec3::new(x, y, 0.0), Vec3::Z))
+                    .collect();
+                for ray in &rays {
+                    let h = accel.intersect(ray, |_, _, _| true);
+                    // t = 1 up to the float rounding of the hit (a few ULPs at 1).
+                    assert!(
+                        h.is_some_and(|h| (h.t - 1.0).abs() < 1e-6),
+                        "{name} own={own} {ray:?}: {h:?}"
+                    );
+                    let short = Ray { tmax: 0.5, ..*ray };
+                    assert!(!accel.occluded(&short, |_, _, _| true), "{name} own={own}");
+                    assert!(accel.occluded(ray, |_, _, _| true), "{name} own={own}");
+                }
+                let mut many = vec![None; rays.len()];
+                accel.intersect_many(&rays, |_, _, _| true, &mut many);
+                assert!(
+                    many.iter()
+                        .all(|h| h.is_some_and(|h| (h.t - 1.0).abs() < 1e-6)),
+                    "{name} own={own}: {many:?}"
+                );
+                let short: Vec<Ray> = rays.iter().map(|r| Ray { tmax: 0.5, ..*r }).collect();
+                let mut blocked = vec![true; rays.len()];
+                accel.occluded_many(&short, |_, _, _| true, &mut blocked);
+                assert!(blocked.iter().all(|b| !b), "{name} own={own}: {blocked:?}");
+            }
+        }
+    }
+
     #[test]
     fn axis_aligned_rays_with_negative_zero_components_hit() {
         let q = [

@@ -115,14 +115,13 @@ use crate::kernels::gather::irradiance_cache::stratum_direction;
 use crate::kernels::gather::photon_map::{PhotonMap, StoredPhoton, cancel_twins};
 use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource, NoIndirect};
 use crate::kernels::gather::{
-    PmIcSettings, base_cell, caustic_seed, extend_cache, gather_at, point_key, probe_points,
-    world_radius,
+    PmIcSettings, base_cell, caustic_seed, extend_cache, gather_at, gather_ray_hit,
+    gather_ray_visiting, point_key, probe_points, world_radius,
 };
 use crate::kernels::photon::segment_hits_box;
 use crate::kernels::photon::{PhotonHit, trace_photon_path};
-use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::{Rgb, luminance};
-use chronolux_core::geometry::{Bounds3, spawn_ray};
+use chronolux_core::geometry::Bounds3;
 use chronolux_core::math::{Frame, Vec2, Vec3};
 use chronolux_core::parallel;
 use chronolux_core::sampling::hash_words;
@@ -763,6 +762,15 @@ impl IcStaticDynamic {
             sigmas: self.settings.influence_sigmas,
         };
         let r_g = world_radius(scene, &s.global);
+        let correction = Correction {
+            settings: s,
+            frame: scene,
+            static_scene: &seg.scene,
+            dynamic: &seg.dynamic,
+            dyn_map: &ph.dyn_map,
+            frame_map: ph.frame_map.as_ref().unwrap_or(&seg.map),
+            static_map: &seg.map,
+        };
         let recs = seg.cache.records();
         let (rec_beta, rec_corr): (Vec<f32>, Vec<Rgb>) =
             parallel::map_chunks(recs.len(), 64, |r| {
@@ -772,17 +780,7 @@ impl IcStaticDynamic {
                         let corr = if ph.dyn_gathered.is_empty() && ph.dyn_map.is_empty() {
                             Rgb::ZERO
                         } else if self.settings.correction_m > 0 {
-                            let frame_map = ph.frame_map.as_ref().unwrap_or(&seg.map);
-                            let c = Correction {
-                                settings: s,
-                                frame: scene,
-                                static_scene: &seg.scene,
-                                dynamic: &seg.dynamic,
-                                dyn_map: &ph.dyn_map,
-                                frame_map,
-                                static_map: &seg.map,
-                            };
-                            c.gathered(rec.p, rec.n, self.settings.correction_m)
+                            correction.gathered(rec.p, rec.n, self.settings.correction_m)
                         } else if ph.dyn_gathered.is_empty() {
                             Rgb::ZERO
                         } else {
@@ -936,50 +934,28 @@ impl Correction<'_> {
         let mut rng = Pcg32::new(hash_words(&[key, 1]), 0x6761_7468);
         let np = 3 * m;
         let frame = Frame::from_normal(n);
-        let r_max = world_radius(self.frame, &s.global);
         let mut sum = Rgb::ZERO;
         for j in 0..m {
             for k in 0..np {
                 let (dir, _) = stratum_direction(&frame, m, np, j, k, jr.next_f32(), jr.next_f32());
                 let start = rng.clone();
-                let (l, touched) = chain_radiance(
+                let mut touched = false;
+                let l = radiance(gather_ray_visiting(
                     self.frame,
                     s,
-                    self.dyn_map,
-                    self.dynamic,
+                    &[self.dyn_map],
                     x,
                     n,
                     dir,
                     &mut rng,
-                    r_max,
-                );
+                    |i| touched |= self.dynamic.get(i as usize).copied().unwrap_or(true),
+                ));
                 sum += if touched {
                     let (mut a, mut b) = (start.clone(), start);
-                    let lf = chain_radiance(
-                        self.frame,
-                        s,
-                        self.frame_map,
-                        &[],
-                        x,
-                        n,
-                        dir,
-                        &mut a,
-                        r_max,
-                    )
-                    .0;
-                    let ls = chain_radiance(
-                        self.static_scene,
-                        s,
-                        self.static_map,
-                        &[],
-                        x,
-                        n,
-                        dir,
-                        &mut b,
-                        r_max,
-                    )
-                    .0;
-                    lf - ls
+                    let lf = gather_ray_hit(self.frame, s, &[self.frame_map], x, n, dir, &mut a);
+                    let ls =
+                        gather_ray_hit(self.static_scene, s, &[self.static_map], x, n, dir, &mut b);
+                    radiance(lf) - radiance(ls)
                 } else {
                     l
                 };
@@ -989,52 +965,9 @@ impl Correction<'_> {
     }
 }
 
-/// The radiance `map` gives along a gather ray from `(x, n)` in direction `dir` (through
-/// specular chains as [`crate::kernels::gather::gather_ray`]), and whether a vertex of its
-/// chain lies on an instance marked in `dynamic` (ids past its end count as dynamic).
-#[allow(clippy::too_many_arguments)]
-fn chain_radiance(
-    scene: &FrameScene,
-    s: &PmIcSettings,
-    map: &PhotonMap,
-    dynamic: &[bool],
-    x: Vec3,
-    n: Vec3,
-    dir: Vec3,
-    rng: &mut Pcg32,
-    r_max: f32,
-) -> (Rgb, bool) {
-    let mut ray = spawn_ray(x, n, dir);
-    let mut beta = Rgb::ONE;
-    let mut touched = false;
-    let on_dynamic =
-        |i: u32| !dynamic.is_empty() && dynamic.get(i as usize).copied().unwrap_or(true);
-    for _ in 0..=s.max_specular_depth {
-        let Some(hit) = scene.intersect(&ray) else {
-            return (Rgb::ZERO, touched);
-        };
-        let si = scene.interaction(&hit, &ray);
-        touched |= on_dynamic(si.instance);
-        let wo = -ray.d.normalize();
-        let bsdf = scene.bsdf(&si);
-        let (u_lobe, u_dir) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
-        if bsdf.has_non_delta() {
-            let ns = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };
-            return (
-                beta * map.radiance(si.p, ns, wo, &bsdf, &s.global, r_max),
-                touched,
-            );
-        }
-        let Some(bs) = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance) else {
-            return (Rgb::ZERO, touched);
-        };
-        beta *= bs.weight;
-        if beta == Rgb::ZERO {
-            break;
-        }
-        ray = spawn_ray(si.p, si.ng, bs.wi);
-    }
-    (Rgb::ZERO, touched)
+/// The radiance of a gather ray's result (zero where it found nothing).
+fn radiance(r: Option<(Rgb, f32, u32)>) -> Rgb {
+    r.map_or(Rgb::ZERO, |(l, _, _)| l)
 }
 
 /// The influence measure and blend weight (see the module doc).

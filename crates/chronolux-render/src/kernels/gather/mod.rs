@@ -234,6 +234,22 @@ pub fn gather_ray_hit(
     dir: Vec3,
     rng: &mut Pcg32,
 ) -> Option<(Rgb, f32, u32)> {
+    gather_ray_visiting(scene, s, maps, x, n, dir, rng, |_| {})
+}
+
+/// [`gather_ray_hit`], calling `visit` with the instance of every vertex of the ray's
+/// chain (the delta vertices and the one whose radiance is read), in order.
+#[allow(clippy::too_many_arguments)]
+pub fn gather_ray_visiting(
+    scene: &FrameScene,
+    s: &PmIcSettings,
+    maps: &[&PhotonMap],
+    x: Vec3,
+    n: Vec3,
+    dir: Vec3,
+    rng: &mut Pcg32,
+    mut visit: impl FnMut(u32),
+) -> Option<(Rgb, f32, u32)> {
     let r_max = world_radius(scene, &s.global);
     let mut ray = spawn_ray(x, n, dir);
     let mut beta = Rgb::ONE;
@@ -241,6 +257,7 @@ pub fn gather_ray_hit(
     for _ in 0..=s.max_specular_depth {
         let hit = scene.intersect(&ray)?;
         let si = scene.interaction(&hit, &ray);
+        visit(si.instance);
         if first.is_none() {
             first = Some(((si.p - x).length(), si.instance));
         }

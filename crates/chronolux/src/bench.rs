@@ -40,6 +40,7 @@ use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
+use update::process_cpu_seconds;
 
 #[derive(Args, Debug)]
 pub struct BenchArgs {
@@ -325,25 +326,6 @@ fn ray_sets(scene: &FrameScene, tris: &[(TriRef, [Vec3; 3])], n: usize) -> [Vec<
     [hemi, boxed]
 }
 
-/// CPU seconds of this process: the sum over its threads of the scheduler's run time
-/// (`/proc/self/task/*/schedstat`, nanoseconds), else `/proc/self/stat`'s 10 ms ticks. The
-/// ray sets take tens of milliseconds, too short for ticks; on a shared machine wall time
-/// counts the other sessions' load, CPU time only ours (and Mitsuba's side is timed the
-/// same way, `scripts/peer/mitsuba_rays.py`).
-fn process_cpu_seconds() -> f64 {
-    let precise = || -> Option<f64> {
-        let mut ns = 0u64;
-        for t in std::fs::read_dir("/proc/self/task").ok()? {
-            let s = std::fs::read_to_string(t.ok()?.path().join("schedstat")).ok()?;
-            ns += s.split_whitespace().next()?.parse::<u64>().ok()?;
-        }
-        Some(ns as f64 * 1e-9)
-    };
-    precise()
-        .or_else(chronolux_render::framework::run::cpu_seconds)
-        .unwrap_or(f64::NAN)
-}
-
 /// One traced set: wall and process CPU seconds, hits, Σt over hits.
 struct Traced {
     wall_s: f64,
@@ -356,6 +338,9 @@ struct Traced {
 /// (16-ray packets on Embree), as a wavefront kernel would issue them, instead of one call
 /// per ray. The timed part is the queries and the per-ray conversions of our interface
 /// (ray to Embree's layout, hit back), as a kernel pays them; the rays are made before.
+/// CPU seconds come from [`process_cpu_seconds`] (`CLOCK_PROCESS_CPUTIME_ID`), the clock
+/// of Mitsuba's side too (`time.process_time` in `scripts/peer/mitsuba_rays.py`): on a
+/// shared machine wall time counts the other sessions' load.
 fn trace(scene: &FrameScene, rays: &[Ray], shadow: bool, packets: bool) -> Traced {
     let cpu0 = process_cpu_seconds();
     let start = Instant::now();

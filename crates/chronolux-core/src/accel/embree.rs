@@ -4,8 +4,10 @@
 //! figure is measured against, trace their CPU rays with Embree, whose 4-, 8- and 16-wide
 //! BVHs with spatial splits and hand-vectorised AVX2/AVX-512 kernels took Intel a decade;
 //! on the same rays our CWBVH traversal (obvhs) did 0.5–0.7× its closest-hit and
-//! 0.35–0.45× its shadow rays (BENCHMARKS.md §2). Calling the same kernel gives the same
-//! speed by construction, so the work here is the binding, not a race.
+//! 0.35–0.45× its shadow rays (the first run, 2026-11-22: bench-results/HISTORY.md §2;
+//! BENCHMARKS.md, "The ray core on Embree", has the current figures). Calling the same
+//! kernel gives the same speed by construction, so the work here is the binding, not a
+//! race.
 //!
 //! Nothing is linked: like the denoiser, the library is opened with `dlopen` when the first
 //! structure is built, so a build or machine without it still renders (on [`super`]'s own

@@ -2,6 +2,7 @@
 
 pub use glam::{Affine3A, Mat3, Mat4, Quat, UVec2, Vec2, Vec3, Vec3A, Vec4, vec2, vec3, vec4};
 
+pub mod cell_hash;
 mod frame;
 pub use frame::Frame;
 

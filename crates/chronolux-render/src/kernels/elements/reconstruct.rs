@@ -26,9 +26,8 @@
 use super::element_map::{ElementAccumulators, ElementMesh, FrameElements, Located};
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::math::Vec3;
+use chronolux_core::math::cell_hash::CellMap;
 use chronolux_core::parallel;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 /// Filtering of element estimates (radius in element sizes).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -135,43 +134,14 @@ pub fn gauss_inv2s2(r: f32) -> f32 {
 /// element order.
 struct Grid {
     cell: f32,
-    buckets: HashMap<(i32, i32, i32), Vec<u32>, BuildHasherDefault<CellHasher>>,
-}
-
-/// Hasher of grid cell keys: one multiply-rotate per word (the FxHash scheme of rustc).
-/// The standard SipHash was 3 % of `spacetime-dept`'s CPU on a moving model (27 lookups
-/// per rebuilt row); cell keys come from the scene, not from an adversary, so a fast
-/// non-keyed hash is enough. Rows do not depend on it (buckets are filled in element
-/// order and visited in a fixed order of cells).
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    #[inline]
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    #[inline]
-    fn write_i32(&mut self, i: i32) {
-        self.write_u64(i as u32 as u64);
-    }
-    #[inline]
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-    #[inline]
-    fn finish(&self) -> u64 {
-        self.0
-    }
+    buckets: CellMap<(i32, i32, i32), Vec<u32>>,
 }
 
 impl Grid {
     fn new(fe: &FrameElements, radius: f32) -> Self {
         let mut g = Grid {
             cell: radius.max(1e-12),
-            buckets: HashMap::default(),
+            buckets: CellMap::default(),
         };
         for (e, c) in fe.centroid.iter().enumerate() {
             if fe.area[e] > 0.0 {

@@ -39,8 +39,8 @@
 //!   in use. Ward's octree does the same job; the hash grid needs no rebalancing.
 
 use chronolux_core::color::{Rgb, luminance};
+use chronolux_core::math::cell_hash::CellMap;
 use chronolux_core::math::{Frame, Vec3};
-use std::collections::HashMap;
 use std::f32::consts::PI;
 
 /// One irradiance record.
@@ -280,7 +280,7 @@ pub struct IrradianceCache {
     pub accuracy: f32,
     records: Vec<Record>,
     base_cell: f32,
-    grid: HashMap<(u8, i32, i32, i32), Vec<u32>>,
+    grid: CellMap<(u8, i32, i32, i32), Vec<u32>>,
     levels_used: u32,
 }
 
@@ -292,7 +292,7 @@ impl IrradianceCache {
             accuracy,
             records: Vec::new(),
             base_cell: base_cell.max(1e-9),
-            grid: HashMap::new(),
+            grid: CellMap::default(),
             levels_used: 0,
         }
     }
@@ -366,11 +366,19 @@ impl IrradianceCache {
         }
     }
 
-    /// Whether some record is valid at (x, n).
+    /// Whether some record is valid at (x, n): [`Self::for_valid`]'s test, stopping at
+    /// the first record that passes it.
     pub fn covers(&self, x: Vec3, n: Vec3) -> bool {
-        let mut any = false;
-        self.for_valid(x, n, |_, _| any = true);
-        any
+        (0..LEVELS).any(|level| {
+            self.levels_used & (1 << level) != 0
+                && self.grid.get(&self.cell(level, x)).is_some_and(|ids| {
+                    ids.iter().any(|&id| {
+                        self.records[id as usize]
+                            .error(x, n)
+                            .is_some_and(|eps| eps < self.accuracy)
+                    })
+                })
+        })
     }
 
     /// Ward's interpolation at (x, n): the weighted irradiance and the weight sum, `None`

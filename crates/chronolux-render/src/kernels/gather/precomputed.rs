@@ -15,23 +15,27 @@
 //!
 //! ## Precomputed irradiance
 //! At every `stride`-th photon of a group's map (in photon-index order) the irradiance
-//! `E` is estimated once per frame from that map's `k_g` nearest photons with the photon's
+//! `E` is estimated once per frame from that map's `k` nearest photons with the photon's
 //! own normal (`PhotonMap::irradiance`: the same filter, radius limit and normal tests as
-//! `pm-ic`'s estimate), `k_g = max(k_min, round(k · n_g / n_all))` with `n_g` the group's
-//! stored photons: the group's photons within `pm-ic`'s disc of `k` photons from all
-//! groups, so the estimate's disc has `pm-ic`'s radius where the groups' photon densities
-//! are in proportion (and at least `k_min` photons where a group is sparse). A lookup at a
+//! `pm-ic`'s estimate; `k` is `pm-ic`'s unless set, in every group). Every group's
+//! estimate then has the count bias of `pm-ic`'s `k`-photon estimate; a group with a share
+//! `s` of the photons gets a disc `1/√s` times `pm-ic`'s radius (more blur, the noise of
+//! `k` photons). A `k` scaled by the share instead (the group's photons inside `pm-ic`'s
+//! disc, at least 16) was tried: it raised the image mean by 1.4 % against `pm-ic` on the
+//! moving-light test scene (0.2 % with the same `k`): the `k`-nearest estimate's bias grows
+//! as its photon count falls (measured 2026-12-08, the scene of `tests/it/icsel.rs`,
+//! frame 0, 60k photons, 32²). A lookup at a
 //! gather hit `x` with side normal `n` takes the nearest precomputed point within the
 //! lookup's world radius whose normal agrees (`n_p · n ≥ ½`, Jensen's test; the nearest
 //! [`NEAREST`], then [`NEAREST_WIDE`], are searched) and returns its `E`; the radiance is
 //! `f(wo, n) · E` ([`GatherHit::w`]), exact for a Lambertian surface (`ρ/π · E`).
 //!
 //! ## Bias (what the tests bound)
-//! - The estimate's blur is `pm-ic`'s (same disc where densities are proportional; a
-//!   larger disc where a group has fewer than `k_min`-worth of photons): second order in
-//!   its radius `r`, as [`super`] states.
+//! - The estimate's blur is `pm-ic`'s for a group that has (nearly) all the photons and
+//!   wider for the others (radius `r/√s`, above): second order in its radius `r`, as
+//!   [`super`] states.
 //! - The lookup reads `E` at a point `q` up to the distance to the nearest precomputed
-//!   photon away (about `r·√(stride/k_g)`, the spacing of every `stride`-th of `k_g`
+//!   photon away (about `r·√(stride/k)`, the spacing of every `stride`-th of `k`
 //!   photons in a disc of radius `r`; never more than the world radius): an extra blur of
 //!   the same order, so the kernel's support grows from `r` to at most `2r` and the
 //!   second-order blur term at most fourfold.
@@ -177,8 +181,8 @@ pub struct GroupMaps {
 impl GroupMaps {
     /// Traces the global photons `base .. base + s.photons` of `scene`, splits them by
     /// light group and precomputes the irradiance at every `stride`-th photon of each
-    /// group (at least `k_min` photons per estimate).
-    pub fn build(scene: &FrameScene, s: &PmIcSettings, base: u64, stride: u32, k_min: u32) -> Self {
+    /// group from its `k` nearest photons (0: `s.global.k`, `pm-ic`'s).
+    pub fn build(scene: &FrameScene, s: &PmIcSettings, base: u64, stride: u32, k: u32) -> Self {
         let n = s.photons;
         let (group_of, groups) = light_groups(scene);
         let seed = s.common.seed;
@@ -213,16 +217,16 @@ impl GroupMaps {
                 per[g as usize].push(p);
             }
         }
-        let all: usize = per.iter().map(Vec::len).sum::<usize>().max(1);
         let r_max = world_radius(scene, &s.global);
         let photons: Vec<usize> = per.iter().map(Vec::len).collect();
         let stride = stride.max(1) as usize;
         let maps = per
             .into_iter()
             .map(|ph| {
-                let k_g = ((s.global.k as f64 * ph.len() as f64 / all as f64).round() as u32)
-                    .max(k_min.max(1));
-                let lookup = Lookup { k: k_g, ..s.global };
+                let lookup = Lookup {
+                    k: if k == 0 { s.global.k } else { k },
+                    ..s.global
+                };
                 let map = PhotonMap::build(ph);
                 let at: Vec<usize> = (0..map.len()).step_by(stride).collect();
                 let est = parallel::map_chunks(at.len(), 256, |r| {

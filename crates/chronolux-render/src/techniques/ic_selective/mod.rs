@@ -245,9 +245,9 @@ pub struct IcSelectiveSettings {
     pub light_terms: bool,
     /// Every how many photons of a group's map the irradiance is precomputed. Default 4.
     pub precompute_stride: u32,
-    /// Fewest photons of a precomputed estimate (a group with a small share of the
-    /// photons). Default 16.
-    pub precompute_k_min: u32,
+    /// Photons per precomputed estimate, in every group; 0 (default): the global map
+    /// lookup's `k` (`pm-ic`'s 64).
+    pub precompute_k: u32,
 }
 
 impl Default for IcSelectiveSettings {
@@ -265,7 +265,7 @@ impl Default for IcSelectiveSettings {
             exact_priority: true,
             light_terms: true,
             precompute_stride: 4,
-            precompute_k_min: 16,
+            precompute_k: 0,
         }
     }
 }
@@ -1140,7 +1140,7 @@ impl IcSelective {
                 &s,
                 base,
                 self.settings.precompute_stride,
-                self.settings.precompute_k_min,
+                self.settings.precompute_k,
             );
             let (c, rays) =
                 caustic_photons(scene, base..base + s.photons, s.common.seed, s.photons);

@@ -102,14 +102,22 @@
 //! on the segment, else it would have been a priority stratum), and the map read is this
 //! frame's.
 //!
+//! Measured (BENCHMARKS.md, issue 13 / 41, 2026-12-08, 64², 12-frame windows): on the
+//! moving-light scene 6.7–8.3× less CPU than `pm-ic` at FLIP 0.075–0.07 (1.25–1.30×
+//! before), 3.6× at 0.077; of that, the selective update itself is 1.5× (against this
+//! technique with `refresh = 1`, every stratum re-cast each frame with the same maps), the
+//! rest is the precomputed estimator, which is both cheaper and less noisy than the
+//! 64-photon estimate at a gather hit.
+//!
 //! **Maps are rebuilt every frame, for every group**, with `pm-ic`'s photon budget
 //! (photons `f·N ..`; the light sampler splits it by power, as in `pm-ic`'s one map),
 //! rather than keeping an unchanged group's map where its photon paths met no changed
 //! geometry: (1) the pass is cheap next to the gathers — tracing the photons and
-//! precomputing ≈ 3 200 estimates at 8k photons is ≈ 10 % of a steady frame's CPU
-//! (`seconds_photons`, BENCHMARKS.md); (2) a kept map would be right only for photons
-//! whose paths the change missed, so it would need selective photon tracing's path scan
-//! and patching (`spt`), for a saving bounded by that 10 %; (3) fresh photons each frame
+//! precomputing the estimates (≈ 3 200 at 8k photons) is ≈ 3 % of a steady frame at 4k
+//! photons and ≈ 8 % at 8k on the moving-light scene (`seconds_photons`, BENCHMARKS.md);
+//! (2) a kept map would be right only for photons whose paths the change missed, so it
+//! would need selective photon tracing's path scan and patching (`spt`), for a saving
+//! bounded by those few %; (3) fresh photons each frame
 //! keep the noise of strata cast in different frames independent, which is what lets the
 //! refresh by age average it (a kept map would freeze one noise pattern into every
 //! stratum cast while it is kept). An unchanged group's *terms* are kept (that is where

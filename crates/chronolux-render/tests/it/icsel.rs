@@ -649,9 +649,10 @@ fn ic_selective_is_deterministic_across_thread_counts() {
 /// The eye pass's gathers kept as records serve later frames: over frames 1–5 of the
 /// moving cube (still camera) far fewer gathers are made in the eye pass than with
 /// `store_eye_gathers = false` (`pm-ic`'s unstored gathers, frame by frame), and the
-/// first frame's are the same in both (nothing kept yet). Measured 2026-12-07 (32 × 32,
-/// 8 spp): 25, 14, 14, 9, 9 against 62, 50, 47, 50, 49; those left are mostly on the
-/// moving cube, whose records are dropped every frame.
+/// first frame's are the same in both (nothing kept yet). Measured 2026-12-08 (32 × 32,
+/// 8 spp, precomputed irradiance): 24, 15, 13, 8, 10 against 63, 50, 48, 49, 51 (with the
+/// global map, 2026-12-07: 25, 14, 14, 9, 9 against 62, 50, 47, 50, 49); those left are
+/// mostly on the moving cube, whose records are dropped every frame.
 #[test]
 fn kept_eye_gathers_serve_later_frames() {
     let run = |keep: bool| {

@@ -76,6 +76,7 @@
 
 pub mod irradiance_cache;
 pub mod photon_map;
+pub mod precomputed;
 pub mod view;
 
 use crate::kernels::photon::trace_photons;

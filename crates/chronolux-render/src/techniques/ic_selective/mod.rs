@@ -4,14 +4,20 @@
 //! scenes", CGI 2004; summarised in Tawara et al., SCCG 2004, §3.2).
 //!
 //! ## Method (per frame `f`)
-//! Everything but the final gathering is `pm-ic`'s ([`super`]): the photon maps of frame
-//! `f` (photons `f·N ..`, or `0..N` with `fixed_photons`), the eye pass and the probe pass.
+//! Everything but the final gathering is `pm-ic`'s ([`super`]): the photons of frame `f`
+//! (photons `f·N ..`, or `0..N` with `fixed_photons`), the caustic map, the eye pass and
+//! the probe pass. The global photons are split by the light group they left and each
+//! group's map gets precomputed irradiance (`light_terms`, default;
+//! [`crate::kernels::gather::precomputed`], Christensen 1999; below, "Light changes").
 //! Each record keeps, per stratum `(j, k)` of its `M × N` gather, a [`Stratum`]: the
-//! incident radiance, the hit distance, the instance hit and the frame it was cast in (its
-//! **age** is `f` minus that), in a [`StrataStore`] (paged on disk by default, see
-//! [`store`]). A stratum cast in frame `c` points along the direction of
-//! [`stratum_direction`] jittered by numbers hashed from `(seed, c, record id, stratum)`,
-//! and its gather ray reads frame `c`'s global map.
+//! incident radiance, the hit distance, the instance hit, the frame it was cast in (its
+//! **age** is `f` minus that), the vertex its radiance was read at (point, normal,
+//! weight) and one **term per light group** (the radiance is their sum), in a
+//! [`StrataStore`] (paged on disk by default, see [`store`]). A stratum cast in frame `c`
+//! points along the direction of [`stratum_direction`] jittered by numbers hashed from
+//! `(seed, c, record id, stratum)`, and its gather ray reads frame `c`'s maps: each
+//! group's term is one nearest-neighbour read of its precomputed map (without
+//! `light_terms`: one k-NN radiance estimate of frame `c`'s global map).
 //!
 //! 1. **What changed** since the previous frame rendered: [`FrameDelta::between`].
 //! 2. **Records whose own surface changed** (their instance moved or was deformed) are
@@ -30,10 +36,9 @@
 //!      instances, [`FrameScene::without_instances`]; both tests are necessary conditions
 //!      for the first hit to change, so their conjunction still re-casts every stratum
 //!      whose hit changed, checked bit for bit in `tests/it/icsel.rs`); **all** strata
-//!      when a light or a material changed ([`FrameDelta::lights_changed`]: the maps'
-//!      radiance at every hit may differ, and the kernel cannot tell which light a hit's
-//!      photons came from, so no subset is known to be unaffected; with
-//!      `recast_on_light_change = false` such changes are left to the refresh by age);
+//!      when a material changed (or the light grouping did, or, without `light_terms`,
+//!      any light: [`FrameDelta::lights_changed`]), reported as `recast_all`; with
+//!      `recast_on_light_change = false` such changes are left to the refresh by age;
 //!    - then, up to a budget of `ceil(refresh · M·N)` strata per record (priority ones
 //!      count against it), strata chosen **by age**: the refresh probability of a stratum
 //!      is proportional to its age, and the strata are drawn without replacement with
@@ -47,6 +52,12 @@
 //!      exact procedure we could not consult: it refreshes the oldest strata first, a
 //!      stratum is never refreshed twice in a frame, and every stratum with age ≥ 1
 //!      keeps a non-zero chance;
+//!    - **light terms re-read**: in a frame where lights of some groups changed (moved,
+//!      or their intensity, colour or cone did: [`FrameDelta::light_changed`], from the
+//!      animation), every stratum not re-cast above that hit something keeps its hit
+//!      point and weight and re-reads those groups' terms from their maps of this frame
+//!      (one nearest-neighbour read each); the other groups' terms are kept (counted as
+//!      `strata_reread` and `terms_reread` per group);
 //!    - the record's irradiance, harmonic mean distance and gradients are recomputed from
 //!      all its strata ([`gather_from_strata`], Ward–Heckbert as `pm-ic`) and the record
 //!      remade with `pm-ic`'s radius limits and clamps.
@@ -76,21 +87,48 @@
 //! cost; the cast count's floor is the budget plus the records rebuilt on the moving
 //! object (≈ 76 records, 33 000 strata per frame), which is what is left to cut there.
 //!
-//! ### Light changes: why not per-light strata (issue 41, not done)
-//! A light change still re-casts every stratum (step 4). Strata that kept one radiance per
-//! light (photons tagged with the light they left, one map per light) would let a light
-//! change re-evaluate only that light's term, but only where its photons arrive, and
-//! only at the cost of one lookup in its map. On the moving-light scene (a point light
-//! that sees the whole room, moving every frame) both fail: every gather hit receives its
-//! photons, and a profile of `pm-ic` there (`perf`, 64², 8k photons) puts ≈ 75 % of the
-//! time in the photon-map radiance estimate (k-NN search 29 %, sorting the neighbours
-//! 16 %, the estimate with its BSDF evaluations 29 %) and ≈ 4 % in ray casting of every
-//! kind, so re-evaluating one light's term costs what re-casting the stratum costs. The next
-//! design: per-light maps whose radiance is precomputed at a subset of their photons once
-//! per frame (Christensen 1999), only for the lights that changed, so that a stratum's
-//! re-evaluation is one nearest-neighbour read in the changed light's map; with the
-//! other lights' terms kept per stratum, a moving light would then cost a fraction of a
-//! gather per stratum.
+//! ### Light changes: per-group terms over precomputed irradiance (issue 41)
+//! Before, a light change re-cast every stratum: the one global map cannot tell which
+//! light a photon came from, and each cast is a 64-photon k-NN radiance estimate (≈ 75 %
+//! of `pm-ic`'s time on the moving-light scene, `perf`; ≈ 71 % of this technique's there,
+//! measured again 2026-12-08 at 8k photons). Now (Christensen 1999) each light group's
+//! photons make their own map with irradiance precomputed once per frame at every
+//! `precompute_stride`-th photon, so that a gather ray's lookup is one nearest-neighbour
+//! read; strata keep their hit point and one term per group, and a frame where only the
+//! point light moved re-reads that group's term of each stratum (a read, no ray, no
+//! estimate) and keeps the ceiling lamp's, while strata that changed geometry reached
+//! are re-cast as before (the exact test). A re-read term is exact for the hit it is read
+//! at: the hit is still the first hit along the stratum's direction (no changed geometry
+//! on the segment, else it would have been a priority stratum), and the map read is this
+//! frame's.
+//!
+//! Measured (BENCHMARKS.md, issue 13 / 41, 2026-12-08, 64², 12-frame windows): on the
+//! moving-light scene 6.7–8.3× less CPU than `pm-ic` at FLIP 0.075–0.07 (1.25–1.30×
+//! before), 3.6× at 0.077; of that, the selective update itself is 1.5× (against this
+//! technique with `refresh = 1`, every stratum re-cast each frame with the same maps), the
+//! rest is the precomputed estimator, which is both cheaper and less noisy than the
+//! 64-photon estimate at a gather hit.
+//!
+//! **Maps are rebuilt every frame, for every group**, with `pm-ic`'s photon budget
+//! (photons `f·N ..`; the light sampler splits it by power, as in `pm-ic`'s one map),
+//! rather than keeping an unchanged group's map where its photon paths met no changed
+//! geometry: (1) the pass is cheap next to the gathers — tracing the photons and
+//! precomputing the estimates (≈ 3 200 at 8k photons) is ≈ 3 % of a steady frame at 4k
+//! photons and ≈ 8 % at 8k on the moving-light scene (`seconds_photons`, BENCHMARKS.md);
+//! (2) a kept map would be right only for photons whose paths the change missed, so it
+//! would need selective photon tracing's path scan and patching (`spt`), for a saving
+//! bounded by those few %; (3) fresh photons each frame
+//! keep the noise of strata cast in different frames independent, which is what lets the
+//! refresh by age average it (a kept map would freeze one noise pattern into every
+//! stratum cast while it is kept). An unchanged group's *terms* are kept (that is where
+//! the time was); only its map is rebuilt.
+//!
+//! Bias added: the precomputed lookup's ([`crate::kernels::gather::precomputed`]: the
+//! estimate's disc is `pm-ic`'s where the groups' densities are in proportion, and reading
+//! `E` at the nearest precomputed photon at most doubles the kernel's support), and
+//! `f(wo, n)·E` for the radiance (exact for Lambertian hits). A kept term of an unchanged
+//! group is stale in the way a kept stratum always was (a change of radiance at its hit
+//! caused by geometry elsewhere), never because of a light change.
 //!
 //! ### Why step 7 (issue 41)
 //! Measured on cornell-moving at 64² (BENCHMARKS.md, issue 13): `pm-ic`'s eye pass makes
@@ -113,7 +151,9 @@
 //! images are **bit-identical for any thread count**, and for either store.
 //!
 //! ## Bias
-//! `pm-ic`'s (see [`super`]), plus **staleness**: a stratum not re-cast this frame holds
+//! `pm-ic`'s (see [`super`]), with the gather hits' radiance read from precomputed
+//! irradiance (`light_terms`: the blur and the Lambertian reading of "Light changes"
+//! above), plus **staleness**: a stratum not re-cast this frame holds
 //! the radiance of the frame it was cast in. Geometry changes along a direction (hit
 //! object moved, an object moved into or out of it) are always re-cast, so a stale
 //! stratum sees the same surface at the same distance; what it can miss is a change of
@@ -125,7 +165,9 @@
 //! ## Memory
 //! In memory per record: position, normal, the record itself and bookkeeping (≈ 160
 //! bytes, plus its entries in the cache's grid, rebuilt each frame); the strata
-//! (`24 · M · N` bytes per record, 10 KiB at 12 × 36) are in the store, whose resident
+//! ([`Stratum::BYTES`] = 108 bytes each with the hit point, weight and
+//! [`crate::kernels::gather::precomputed::MAX_GROUPS`] terms: 46 KiB per record at
+//! 12 × 36) are in the store, whose resident
 //! part is bounded by `cache_pages × page_kb` KiB with the paged store (plus one chunk of
 //! [`CHUNK`] records' strata being refreshed). The eye pass's
 //! gathers (step 6) hold their strata until the pass ends up to `eye_buffer_mb` MiB
@@ -141,10 +183,13 @@ use crate::kernels::gather::irradiance_cache::{
     stratum_direction,
 };
 use crate::kernels::gather::photon_map::PhotonMap;
+use crate::kernels::gather::precomputed::{
+    GatherHit, GroupMaps, MAX_GROUPS, gather_hit, light_groups,
+};
 use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource, NoIndirect};
 use crate::kernels::gather::{
-    BATCH, PmIcSettings, base_cell, frame_maps, gather_ray_hit, photon_base, point_key,
-    probe_points,
+    BATCH, FrameMaps, PmIcSettings, base_cell, caustic_photons, frame_maps, gather_ray_hit,
+    photon_base, point_key, probe_points,
 };
 use chronolux_core::color::Rgb;
 use chronolux_core::geometry::{Bounds3, spawn_ray};
@@ -181,9 +226,13 @@ pub struct IcSelectiveSettings {
     pub cache_pages: u32,
     /// Directory of the paged store's file; empty: the system's temporary directory.
     pub store_dir: String,
-    /// Re-cast every stratum in a frame where a light or a material changed (true,
-    /// default: no stale light), or leave such changes to the refresh by age like any
-    /// other change of radiance at a hit (false: light lags by about `1/refresh` frames).
+    /// Bring light and material changes in at once (true, default: no stale light): with
+    /// `light_terms`, a frame where lights changed re-reads the changed groups' terms of
+    /// every stratum not re-cast, and one where a material or the light grouping changed
+    /// re-casts every stratum; without `light_terms`, every stratum is re-cast when a
+    /// light or a material changed. False: such changes are left to the refresh by age
+    /// like any other change of radiance at a hit (light lags by about `1/refresh`
+    /// frames).
     pub recast_on_light_change: bool,
     /// Keep the gathers the eye pass makes at points no record covers as records (true,
     /// default; see the module doc), or discard them after use as `pm-ic` does (false).
@@ -195,6 +244,18 @@ pub struct IcSelectiveSettings {
     /// that instance's geometry in the previous or this frame (true, default), or on the
     /// box alone (false).
     pub exact_priority: bool,
+    /// Per-light-group photon maps with precomputed irradiance, and per-group terms kept
+    /// per stratum (true, default; see the module doc): a frame where only some light
+    /// groups changed re-reads those groups' terms of the strata it does not re-cast
+    /// (one nearest-neighbour read each); false: one global map read by a k-NN radiance
+    /// estimate per cast stratum, and every stratum re-cast when a light changed (the
+    /// 2026-12-07 design).
+    pub light_terms: bool,
+    /// Every how many photons of a group's map the irradiance is precomputed. Default 4.
+    pub precompute_stride: u32,
+    /// Photons per precomputed estimate, in every group; 0 (default): the global map
+    /// lookup's `k` (`pm-ic`'s 64).
+    pub precompute_k: u32,
 }
 
 impl Default for IcSelectiveSettings {
@@ -210,6 +271,9 @@ impl Default for IcSelectiveSettings {
             store_eye_gathers: true,
             eye_buffer_mb: 64,
             exact_priority: true,
+            light_terms: true,
+            precompute_stride: 4,
+            precompute_k: 0,
         }
     }
 }
@@ -268,16 +332,45 @@ struct Change {
     /// test of a ray segment against the changed geometry; `None` when nothing changed
     /// or `exact_priority` is off).
     exact: Option<(FrameScene, FrameScene)>,
+    /// Per light group (with `light_terms`): some light of the group changed, so the
+    /// group's term of every stratum not re-cast is re-read.
+    reread: Vec<bool>,
+    /// Why every stratum is re-cast (`all_stale`): "materials", "lights" (without
+    /// `light_terms`) or "light groups" (the grouping differs from the previous frame's).
+    reason: &'static str,
 }
 
 /// The phases of [`IcSelective::render`] that update the kept records (the module doc's
 /// steps 1 to 5), in order.
 impl State {
-    fn change_to(&self, scene: &FrameScene, recast_on_light_change: bool, exact: bool) -> Change {
+    fn change_to(
+        &self,
+        scene: &FrameScene,
+        recast_on_light_change: bool,
+        exact: bool,
+        light_terms: bool,
+    ) -> Change {
         let delta = FrameDelta::between(&self.prev, scene);
         let changed = delta.dynamic_instances();
-        let all_stale =
-            recast_on_light_change && (delta.lights_changed() || delta.materials_changed());
+        let (groups, n_groups) = light_groups(scene);
+        let mut reread = vec![false; if light_terms { n_groups } else { 0 }];
+        let mut reason = "";
+        if recast_on_light_change {
+            if delta.materials_changed() {
+                reason = "materials";
+            } else if !light_terms && delta.lights_changed() {
+                reason = "lights";
+            } else if light_terms && light_groups(&self.prev) != (groups.clone(), n_groups) {
+                reason = "light groups";
+            } else if light_terms {
+                for (l, &g) in groups.iter().enumerate() {
+                    if delta.light_changed(l) {
+                        reread[g as usize] = true;
+                    }
+                }
+            }
+        }
+        let all_stale = !reason.is_empty();
         let boxes = delta.changed_bounds();
         let exact = (exact && !boxes.is_empty()).then(|| {
             let still: Vec<bool> = changed.iter().map(|c| !c).collect();
@@ -291,6 +384,8 @@ impl State {
             all_stale,
             boxes,
             exact,
+            reread,
+            reason,
         }
     }
 
@@ -377,9 +472,7 @@ impl State {
                 let r = &mut records[start + i];
                 self.store.write(r.slot, &b);
                 r.record = rec;
-                counts.priority += c.priority;
-                counts.aged += c.aged;
-                counts.box_only += c.box_only;
+                counts.add(&c);
             }
             t_store += ts.elapsed().as_secs_f64();
         }
@@ -396,7 +489,7 @@ impl State {
         at: &Refresh,
         spr: usize,
     ) -> (IrradianceCache, u64, f64) {
-        let (scene, s, frame) = (at.scene, at.s, at.frame);
+        let (scene, s) = (at.scene, at.s);
         let mut t_store = 0.0f64;
         let mut cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
         for r in records.iter() {
@@ -416,9 +509,7 @@ impl State {
             let made = parallel::map_chunks(need.len(), 1, |r| {
                 let (_, q) = need[r.start];
                 let id = first_id + r.start as u64;
-                let strata: Vec<Stratum> = (0..spr)
-                    .map(|i| cast_stratum(scene, s, at.global, q.p, q.n, id, i, frame))
-                    .collect();
+                let strata: Vec<Stratum> = (0..spr).map(|i| at.cast(q.p, q.n, id, i)).collect();
                 let g = gather_of(s, id, q.n, &strata);
                 let rec = record_from(&s.cache, q.p, q.n, q.footprint, &g);
                 (id, *q, strata, rec)
@@ -482,7 +573,7 @@ impl State {
         let recast = parallel::map_chunks(redo.len(), 1, |r| {
             let m = &kept[redo[r.start]];
             (0..spr)
-                .map(|i| cast_stratum(at.scene, at.s, at.global, m.q.p, m.q.n, m.id, i, at.frame))
+                .map(|i| at.cast(m.q.p, m.q.n, m.id, i))
                 .collect::<Vec<Stratum>>()
         });
         for (i, strata) in redo.into_iter().zip(recast) {
@@ -565,9 +656,7 @@ impl IndirectSource for SelSource<'_> {
         let key = point_key(q.p, q.n);
         let id = key | EYE_ID;
         let spr = (s.gather_m.max(1) * s.gather_n.max(1)) as usize;
-        let strata: Vec<Stratum> = (0..spr)
-            .map(|i| cast_stratum(at.scene, s, at.global, q.p, q.n, id, i, at.frame))
-            .collect();
+        let strata: Vec<Stratum> = (0..spr).map(|i| at.cast(q.p, q.n, id, i)).collect();
         let g = gather_of(s, id, q.n, &strata);
         let rec = record_from(&s.cache, q.p, q.n, q.footprint, &g);
         self.gathers.fetch_add(1, Ordering::Relaxed);
@@ -659,7 +748,50 @@ pub fn cast_stratum(
             dist: d.max(1e-6),
             hit: inst,
             cast: frame,
+            ..Stratum::EMPTY
         },
+        None => Stratum {
+            cast: frame,
+            ..Stratum::EMPTY
+        },
+    }
+}
+
+/// [`cast_stratum`] reading the light groups' precomputed maps `maps`: the same direction
+/// and delta chain, the vertex read kept with its weight and every group's term `w ·
+/// E_g(x)`; the radiance is their sum.
+#[allow(clippy::too_many_arguments)]
+pub fn cast_stratum_terms(
+    scene: &FrameScene,
+    s: &PmIcSettings,
+    maps: &GroupMaps,
+    p: Vec3,
+    n: Vec3,
+    id: u64,
+    idx: usize,
+    frame: u32,
+) -> Stratum {
+    let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
+    let (xi, psi, mut rng) = stratum_rngs(s.common.seed, frame, id, idx);
+    let fr = Frame::from_normal(n);
+    let (dir, _) = stratum_direction(&fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi);
+    match gather_hit(scene, s, p, n, dir, &mut rng) {
+        Some(hit) => {
+            let mut terms = [Rgb::ZERO; MAX_GROUPS];
+            for (g, t) in terms.iter_mut().enumerate().take(maps.groups()) {
+                *t = maps.term(g, &hit);
+            }
+            Stratum {
+                l: terms.iter().copied().sum(),
+                dist: hit.dist.max(1e-6),
+                hit: hit.instance,
+                cast: frame,
+                x: hit.x,
+                ns: hit.ns,
+                w: hit.w,
+                terms,
+            }
+        }
         None => Stratum {
             cast: frame,
             ..Stratum::EMPTY
@@ -800,8 +932,12 @@ fn segment_meets_geometry(
 struct Refresh<'a> {
     scene: &'a FrameScene,
     s: &'a PmIcSettings,
-    global: &'a PhotonMap,
+    /// What gather rays read: the frame's global map (without `light_terms`) or its
+    /// light groups' precomputed maps.
+    maps: Reader<'a>,
     frame: u32,
+    /// Per light group: re-read that group's term of the strata not re-cast.
+    reread: &'a [bool],
     /// Per instance: changed since the previous frame.
     changed: &'a [bool],
     /// Boxes (previous and this frame) of the changed instances, slightly enlarged.
@@ -813,15 +949,48 @@ struct Refresh<'a> {
     budget: usize,
 }
 
+/// The maps a frame's gather rays read.
+#[derive(Clone, Copy)]
+enum Reader<'a> {
+    Global(&'a PhotonMap),
+    Groups(&'a GroupMaps),
+}
+
 #[derive(Clone, Copy, Default)]
 struct Counts {
     priority: u64,
     aged: u64,
     /// Segments that met a changed box but not the changed geometry (not re-cast).
     box_only: u64,
+    /// Strata not re-cast whose terms of the changed light groups were re-read.
+    reread: u64,
+    /// Terms re-read, per group.
+    terms: [u64; MAX_GROUPS],
+}
+
+impl Counts {
+    fn add(&mut self, o: &Counts) {
+        self.priority += o.priority;
+        self.aged += o.aged;
+        self.box_only += o.box_only;
+        self.reread += o.reread;
+        for (a, b) in self.terms.iter_mut().zip(o.terms) {
+            *a += b;
+        }
+    }
 }
 
 impl Refresh<'_> {
+    /// Stratum `idx` of record `id` at (p, n), cast in this frame.
+    fn cast(&self, p: Vec3, n: Vec3, id: u64, idx: usize) -> Stratum {
+        match self.maps {
+            Reader::Global(g) => cast_stratum(self.scene, self.s, g, p, n, id, idx, self.frame),
+            Reader::Groups(m) => {
+                cast_stratum_terms(self.scene, self.s, m, p, n, id, idx, self.frame)
+            }
+        }
+    }
+
     fn record(&self, r: &SelRecord, strata: &mut [Stratum]) -> (Record, Counts) {
         let s = self.s;
         let fr = Frame::from_normal(r.n);
@@ -871,9 +1040,29 @@ impl Refresh<'_> {
                 counts.aged += 1;
             }
         }
+        let reread = self.reread.iter().any(|&c| c);
         for (i, t) in strata.iter_mut().enumerate() {
             if recast[i] {
-                *t = cast_stratum(self.scene, s, self.global, r.p, r.n, r.id, i, self.frame);
+                *t = self.cast(r.p, r.n, r.id, i);
+            } else if reread
+                && t.hit != Stratum::NO_HIT
+                && let Reader::Groups(maps) = self.maps
+            {
+                // Only the changed groups' terms; the hit point is still valid (no
+                // changed geometry on the segment, or it would be a priority stratum).
+                let hit = GatherHit {
+                    x: t.x,
+                    ns: t.ns,
+                    w: t.w,
+                    dist: t.dist,
+                    instance: t.hit,
+                };
+                for (g, _) in self.reread.iter().enumerate().filter(|(_, c)| **c) {
+                    t.terms[g] = maps.term(g, &hit);
+                    counts.terms[g] += 1;
+                }
+                t.l = t.terms.iter().copied().sum();
+                counts.reread += 1;
             }
         }
         let g = gather_of(s, r.id, r.n, strata);
@@ -948,8 +1137,30 @@ impl IcSelective {
             scene,
             self.settings.recast_on_light_change,
             self.settings.exact_priority,
+            self.settings.light_terms,
         );
-        let maps = frame_maps(scene, &s, photon_base(&s, frame));
+        let base = photon_base(&s, frame);
+        let (maps, groups) = if self.settings.light_terms {
+            // The global stream split by light group, with precomputed irradiance; the
+            // caustic map as pm-ic's.
+            let g = GroupMaps::build(
+                scene,
+                &s,
+                base,
+                self.settings.precompute_stride,
+                self.settings.precompute_k,
+            );
+            let (c, rays) =
+                caustic_photons(scene, base..base + s.photons, s.common.seed, s.photons);
+            let maps = FrameMaps {
+                global: PhotonMap::empty(),
+                caustic: PhotonMap::build(c),
+                rays: rays + g.rays,
+            };
+            (maps, Some(g))
+        } else {
+            (frame_maps(scene, &s, base), None)
+        };
         let t_photons = t0.elapsed().as_secs_f64();
         let before = st.records.len();
         // 2. Records on a changed surface are rebuilt (dropped here, made anew below).
@@ -966,8 +1177,12 @@ impl IcSelective {
         let refresh = Refresh {
             scene,
             s: &s,
-            global: &maps.global,
+            maps: match &groups {
+                Some(g) => Reader::Groups(g),
+                None => Reader::Global(&maps.global),
+            },
             frame,
+            reread: &change.reread,
             changed: &change.changed,
             boxes: &change.boxes,
             exact: change.exact.as_ref(),
@@ -979,7 +1194,7 @@ impl IcSelective {
         // 5. New records where the view needs them (pm-ic's batches).
         let (mut cache, added, t_add) = st.add_needed(&mut records, &points, &refresh, spr);
         t_store += t_add;
-        let all_stale = change.all_stale;
+        let reason = change.reason;
         let t_cache = t0.elapsed().as_secs_f64() - t_photons;
 
         // 6. The eye pass.
@@ -1025,7 +1240,16 @@ impl IcSelective {
             (counts.priority + counts.aged + (added + eye_gathers) * spr as u64).into(),
         );
         r.insert("records_from_eye".into(), from_eye.into());
-        r.insert("lights_or_materials_changed".into(), all_stale.into());
+        // A frame that re-cast every stratum says so, and why (never silently).
+        r.insert("recast_all".into(), reason.into());
+        r.insert("strata_reread".into(), counts.reread.into());
+        r.insert("terms_reread".into(), counts.terms.to_vec().into());
+        r.insert("groups_reread".into(), change.reread.clone().into());
+        if let Some(g) = &groups {
+            r.insert("light_groups".into(), g.groups().into());
+            r.insert("group_photons".into(), g.photons.clone().into());
+            r.insert("precomputed_points".into(), g.points().into());
+        }
         r.insert("unstored_gathers".into(), eye_gathers.into());
         r.insert("seconds_photons".into(), t_photons.into());
         r.insert("seconds_cache".into(), t_cache.into());

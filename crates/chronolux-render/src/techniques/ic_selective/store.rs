@@ -6,7 +6,7 @@
 //! reads and writes (the paged one round-trips every value bit for bit):
 //! - [`MemoryStore`]: one `Vec`, growing with the highest slot used;
 //! - [`PagedStore`]: a file of fixed-size **pages** (each holding `records_per_page` whole
-//!   records, [`Stratum::BYTES`] bytes per stratum, little-endian) and an in-memory LRU
+//!   records, [`Stratum::BYTES`] bytes per stratum, little-endian 32-bit words) and an in-memory LRU
 //!   cache of at most `cache_pages` pages, read and written with
 //!   [`FileExt::read_at`]/[`FileExt::write_at`]. A page is read on its first use after
 //!   eviction and written back only when dirty. **Memory bound**: `cache_pages × page
@@ -15,7 +15,9 @@
 //!   [`super`]). The file is unlinked as soon as it is created (Unix), so it
 //!   disappears with the process.
 
+use crate::kernels::gather::precomputed::MAX_GROUPS;
 use chronolux_core::color::Rgb;
+use chronolux_core::math::Vec3;
 use std::collections::HashMap;
 use std::fs::File;
 use std::os::unix::fs::FileExt;
@@ -24,7 +26,7 @@ use std::path::PathBuf;
 /// What one gather direction of a record keeps between frames.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Stratum {
-    /// Incident radiance along the stratum's direction when it was cast.
+    /// Incident radiance along the stratum's direction (with per-group terms: their sum).
     pub l: Rgb,
     /// Distance to the first hit (`f32::INFINITY`: nothing hit).
     pub dist: f32,
@@ -33,28 +35,51 @@ pub struct Stratum {
     /// Frame in which it was cast (its age is the current frame minus this; its direction
     /// is jittered from numbers hashed from it).
     pub cast: u32,
+    /// With per-group terms ([`super::IcSelectiveSettings::light_terms`]): the vertex whose
+    /// radiance the ray reads, its side normal and weight
+    /// ([`crate::kernels::gather::precomputed::GatherHit`]), and each light group's term
+    /// `w · E_g(x)` (zero otherwise, and past the frame's groups).
+    pub x: Vec3,
+    pub ns: Vec3,
+    pub w: Rgb,
+    pub terms: [Rgb; MAX_GROUPS],
 }
 
 impl Stratum {
     pub const NO_HIT: u32 = u32::MAX;
+    /// 32-bit words of one stratum on disk.
+    const WORDS: usize = 15 + 3 * MAX_GROUPS;
     /// Bytes of one stratum on disk.
-    pub const BYTES: usize = 24;
+    pub const BYTES: usize = 4 * Self::WORDS;
     pub const EMPTY: Stratum = Stratum {
         l: Rgb::ZERO,
         dist: f32::INFINITY,
         hit: Stratum::NO_HIT,
         cast: 0,
+        x: Vec3::ZERO,
+        ns: Vec3::ZERO,
+        w: Rgb::ZERO,
+        terms: [Rgb::ZERO; MAX_GROUPS],
     };
 
     fn encode(&self, out: &mut [u8]) {
-        let w = [
-            self.l.x.to_bits(),
-            self.l.y.to_bits(),
-            self.l.z.to_bits(),
-            self.dist.to_bits(),
-            self.hit,
-            self.cast,
-        ];
+        let mut w = [0u32; Self::WORDS];
+        let mut i = 0;
+        let mut put = |v: u32| {
+            w[i] = v;
+            i += 1;
+        };
+        for c in [self.l, self.x, self.ns, self.w]
+            .into_iter()
+            .chain(self.terms)
+        {
+            put(c.x.to_bits());
+            put(c.y.to_bits());
+            put(c.z.to_bits());
+        }
+        put(self.dist.to_bits());
+        put(self.hit);
+        put(self.cast);
         for (c, v) in out.chunks_exact_mut(4).zip(w) {
             c.copy_from_slice(&v.to_le_bytes());
         }
@@ -62,15 +87,23 @@ impl Stratum {
 
     fn decode(b: &[u8]) -> Stratum {
         let w = |i: usize| u32::from_le_bytes([b[4 * i], b[4 * i + 1], b[4 * i + 2], b[4 * i + 3]]);
+        let v = |i: usize| {
+            Vec3::new(
+                f32::from_bits(w(3 * i)),
+                f32::from_bits(w(3 * i + 1)),
+                f32::from_bits(w(3 * i + 2)),
+            )
+        };
+        let t = 3 * (4 + MAX_GROUPS);
         Stratum {
-            l: Rgb::new(
-                f32::from_bits(w(0)),
-                f32::from_bits(w(1)),
-                f32::from_bits(w(2)),
-            ),
-            dist: f32::from_bits(w(3)),
-            hit: w(4),
-            cast: w(5),
+            l: v(0),
+            x: v(1),
+            ns: v(2),
+            w: v(3),
+            terms: std::array::from_fn(|g| v(4 + g)),
+            dist: f32::from_bits(w(t)),
+            hit: w(t + 1),
+            cast: w(t + 2),
         }
     }
 }

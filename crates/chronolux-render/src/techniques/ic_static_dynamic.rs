@@ -1170,5 +1170,13 @@ pub static TECHNIQUE: crate::framework::technique::Preset<IcStaticDynamicSetting
         quality: &[],
         defaults: IcStaticDynamicSettings::default,
         common: |s| &mut s.pmic.common,
-        build: |s, _, name| Ok(Box::new(IcStaticDynamic::new(s, name))),
+        build: |s, _, name| {
+            if s.pmic.precompute_stride != 0 {
+                return Err(format!(
+                    "pmic.precompute_stride = {}: the precomputed estimator is not implemented for {name} (its static, dynamic and signed maps are read by the k-NN estimate); leave it 0",
+                    s.pmic.precompute_stride
+                ));
+            }
+            Ok(Box::new(IcStaticDynamic::new(s, name)))
+        },
     };

@@ -128,6 +128,14 @@ pub struct PmIcSettings {
     pub max_glossy_depth: u32,
     /// Use photons `0..N` in every frame instead of `f·N ..`. Default false.
     pub fixed_photons: bool,
+    /// The estimator of a gather ray's radiance. 0 (default): the k-NN radiance estimate
+    /// of the global map ([`PhotonMap::radiance`]). N > 0: Christensen's precomputed
+    /// irradiance at every N-th photon of each light group's map, read by one
+    /// nearest-neighbour lookup ([`precomputed`]: the estimator `ic-selective` keeps its
+    /// strata with, so that `pm-ic` with it is that method frame by frame). Only `pm-ic`
+    /// reads it; the methods that embed these settings refuse a value (`ic-selective`
+    /// has its own `light_terms` and `precompute_stride`).
+    pub precompute_stride: u32,
 }
 
 impl Default for PmIcSettings {
@@ -156,6 +164,7 @@ impl Default for PmIcSettings {
             glossy_alpha: 0.1,
             max_glossy_depth: 3,
             fixed_photons: false,
+            precompute_stride: 0,
         }
     }
 }
@@ -298,6 +307,17 @@ pub fn gather_at(
     n: Vec3,
     key: u64,
 ) -> Gather {
+    gather_keyed(s, n, key, |d, rng| gather_ray(scene, s, maps, x, n, d, rng))
+}
+
+/// The strata of a final gather around `n` whose jitter and ray numbers come from `key`
+/// (the same for every estimator), each traced by `trace(direction, numbers)`.
+pub fn gather_keyed(
+    s: &PmIcSettings,
+    n: Vec3,
+    key: u64,
+    mut trace: impl FnMut(Vec3, &mut Pcg32) -> Option<(Rgb, f32)>,
+) -> Gather {
     let mut rng = Pcg32::new(hash_words(&[s.common.seed, key]), 0x6761_7468);
     let mut jr = Pcg32::new(hash_words(&[s.common.seed, key, 1]), 0x6a69_7474);
     gather(
@@ -305,7 +325,7 @@ pub fn gather_at(
         s.gather_m,
         s.gather_n,
         |_, _| (jr.next_f32(), jr.next_f32()),
-        |d| gather_ray(scene, s, maps, x, n, d, &mut rng),
+        |d| trace(d, &mut rng),
     )
 }
 

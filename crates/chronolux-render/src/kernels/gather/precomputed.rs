@@ -345,3 +345,21 @@ pub fn gather_hit(
         instance,
     })
 }
+
+/// A final gather at (x, n) reading the light groups' maps `maps`: [`super::gather_at`]'s
+/// strata, jitter and delta chains (the same numbers drawn), each stratum's radiance the
+/// sum of the groups' terms at the vertex read ([`GroupMaps::term`]), as `ic-selective`
+/// casts a record's strata.
+pub fn gather_at_groups(
+    scene: &FrameScene,
+    s: &PmIcSettings,
+    maps: &GroupMaps,
+    x: Vec3,
+    n: Vec3,
+    key: u64,
+) -> super::Gather {
+    super::gather_keyed(s, n, key, |d, rng| {
+        gather_hit(scene, s, x, n, d, rng)
+            .map(|h| ((0..maps.groups()).map(|g| maps.term(g, &h)).sum(), h.dist))
+    })
+}

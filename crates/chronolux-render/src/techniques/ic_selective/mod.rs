@@ -1074,6 +1074,12 @@ impl IcSelective {
     /// The technique with its strata store; an error names the store folder that cannot
     /// hold the paged store's file.
     pub fn new(settings: IcSelectiveSettings, name: &'static str) -> Result<Self, String> {
+        if settings.pmic.precompute_stride != 0 {
+            return Err(format!(
+                "pmic.precompute_stride = {}: {name} chooses its estimator with its own `light_terms` and `precompute_stride`; leave pmic.precompute_stride 0",
+                settings.pmic.precompute_stride
+            ));
+        }
         let store = Some(make_store(&settings)?);
         Ok(IcSelective {
             settings,

@@ -128,13 +128,15 @@ pub struct PmIcSettings {
     pub max_glossy_depth: u32,
     /// Use photons `0..N` in every frame instead of `f·N ..`. Default false.
     pub fixed_photons: bool,
-    /// The estimator of a gather ray's radiance. 0 (default): the k-NN radiance estimate
-    /// of the global map ([`PhotonMap::radiance`]). N > 0: Christensen's precomputed
-    /// irradiance at every N-th photon of each light group's map, read by one
-    /// nearest-neighbour lookup ([`precomputed`]: the estimator `ic-selective` keeps its
-    /// strata with, so that `pm-ic` with it is that method frame by frame). Only `pm-ic`
-    /// reads it; the methods that embed these settings refuse a value (`ic-selective`
-    /// has its own `light_terms` and `precompute_stride`).
+    /// The estimator of a gather ray's radiance. 0: the k-NN radiance estimate of the
+    /// global map ([`PhotonMap::radiance`]). N > 0: Christensen's precomputed irradiance
+    /// at every N-th photon of each light group's map, read by one nearest-neighbour
+    /// lookup ([`precomputed`]: the estimator `ic-selective` keeps its strata with, so that
+    /// `pm-ic` with it is that method frame by frame). Only `pm-ic` reads it, and its
+    /// technique defaults set 4 (`techniques::pm_ic::pm_ic_defaults`); this struct's
+    /// default is 0, which the methods that embed these settings keep (they refuse
+    /// another value: `ic-selective` has its own `light_terms` and `precompute_stride`,
+    /// `ic-static-dynamic` reads its maps by the k-NN estimate).
     pub precompute_stride: u32,
 }
 

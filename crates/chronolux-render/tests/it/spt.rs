@@ -133,7 +133,7 @@ fn displayed(st: &SptState) -> (Vec<f64>, Vec<f64>, Vec<f32>) {
         .map(|k| s.indirect.lum(k) + s.caustic.lum(k))
         .collect();
     let sq = (0..s.indirect.len())
-        .map(|k| s.indirect.side(k).flux_sq + s.caustic.side(k).flux_sq)
+        .map(|k| s.indirect.flux_sq[k] + s.caustic.flux_sq[k])
         .collect();
     let fe = FrameElements::new(st.scene(), &st.mesh);
     (flux, sq, fe.area)
@@ -278,9 +278,9 @@ fn a_removed_occluder_leaves_no_shadow_behind() {
         .collect();
     assert!(region.len() > 10, "{} floor sides", region.len());
     let sum = |a: &SignedAccumulators| -> (f64, f64) {
-        region.iter().fold((0.0, 0.0), |(s, q), &k| {
-            (s + a.lum(k), q + a.side(k).flux_sq)
-        })
+        region
+            .iter()
+            .fold((0.0, 0.0), |(s, q), &k| (s + a.lum(k), q + a.flux_sq[k]))
     };
     let (shadowed, _) = sum(&st.solution.direct);
     let u = st.update(

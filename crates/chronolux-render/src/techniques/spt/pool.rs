@@ -455,75 +455,32 @@ pub fn trace_records(
 /// ([`crate::kernels::elements::reconstruct`]) — a removal does not add variance, it takes the removed
 /// photon's term out. Adding and removing the same deposit returns every sum to its old
 /// value up to one `f64` rounding per operation (relative 1e-16).
-///
-/// One [`SideSums`] per side, the three sums side by side in one 64-byte cache line: a
-/// deposit (an update's removals and additions land on scattered sides) touches one line
-/// instead of one in each of three arrays.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct SignedAccumulators {
-    pub sides: Vec<SideSums>,
-}
-
-/// The sums of one element side of [`SignedAccumulators`], in one cache line.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[repr(C, align(64))]
-pub struct SideSums {
-    /// Σ φ (RGB).
-    pub flux: [f64; 3],
-    /// Σ luminance(φ)².
-    pub flux_sq: f64,
-    /// Photons on the side.
-    pub count: i64,
+    pub flux: Vec<[f64; 3]>,
+    pub count: Vec<i64>,
+    pub flux_sq: Vec<f64>,
 }
 
 impl SignedAccumulators {
     pub fn new(elements: usize) -> Self {
         SignedAccumulators {
-            sides: vec![SideSums::default(); 2 * elements],
+            flux: vec![[0.0; 3]; 2 * elements],
+            count: vec![0; 2 * elements],
+            flux_sq: vec![0.0; 2 * elements],
         }
-    }
-
-    /// Sides (two per element).
-    pub fn len(&self) -> usize {
-        self.sides.len()
-    }
-
-    /// No sides.
-    pub fn is_empty(&self) -> bool {
-        self.sides.is_empty()
-    }
-
-    /// The sums of side `slot`.
-    #[inline]
-    pub fn side(&self, slot: usize) -> &SideSums {
-        &self.sides[slot]
-    }
-
-    /// Every side's flux sum.
-    pub fn flux(&self) -> Vec<[f64; 3]> {
-        self.sides.iter().map(|s| s.flux).collect()
-    }
-
-    /// Every side's photon count.
-    pub fn count(&self) -> Vec<i64> {
-        self.sides.iter().map(|s| s.count).collect()
-    }
-
-    /// Every side's Σ luminance(φ)².
-    pub fn flux_sq(&self) -> Vec<f64> {
-        self.sides.iter().map(|s| s.flux_sq).collect()
     }
 
     /// Adds (`sign = 1`) or removes (`sign = −1`) one deposit.
     #[inline]
     pub fn deposit(&mut self, slot: usize, power: Rgb, sign: f64) {
-        let s = &mut self.sides[slot];
-        s.flux[0] += sign * power.x as f64;
-        s.flux[1] += sign * power.y as f64;
-        s.flux[2] += sign * power.z as f64;
-        s.count += sign as i64;
+        let f = &mut self.flux[slot];
+        f[0] += sign * power.x as f64;
+        f[1] += sign * power.y as f64;
+        f[2] += sign * power.z as f64;
+        self.count[slot] += sign as i64;
         let l = luminance(power) as f64;
-        s.flux_sq += sign * l * l;
+        self.flux_sq[slot] += sign * l * l;
     }
 
     /// The sums as the (unsigned, `f32`) accumulators the reconstruction reads, for
@@ -532,27 +489,45 @@ impl SignedAccumulators {
     pub fn to_accumulators(&self, photons: u64) -> ElementAccumulators {
         ElementAccumulators {
             flux: self
-                .sides
+                .flux
                 .iter()
-                .map(|s| {
-                    let f = s.flux;
-                    Rgb::new(f[0] as f32, f[1] as f32, f[2] as f32).max(Rgb::ZERO)
-                })
+                .map(|f| Rgb::new(f[0] as f32, f[1] as f32, f[2] as f32).max(Rgb::ZERO))
                 .collect(),
-            count: self.sides.iter().map(|s| s.count.max(0) as u32).collect(),
-            flux_sq: self
-                .sides
-                .iter()
-                .map(|s| s.flux_sq.max(0.0) as f32)
-                .collect(),
+            count: self.count.iter().map(|&c| c.max(0) as u32).collect(),
+            flux_sq: self.flux_sq.iter().map(|&s| s.max(0.0) as f32).collect(),
             photons,
         }
+    }
+
+    /// Sides (two per element).
+    pub fn len(&self) -> usize {
+        self.flux.len()
+    }
+
+    /// No sides.
+    pub fn is_empty(&self) -> bool {
+        self.flux.is_empty()
+    }
+
+    /// Every side's flux sum.
+    pub fn flux(&self) -> Vec<[f64; 3]> {
+        self.flux.clone()
+    }
+
+    /// Every side's photon count.
+    pub fn count(&self) -> Vec<i64> {
+        self.count.clone()
+    }
+
+    /// Every side's Σ luminance(φ)².
+    pub fn flux_sq(&self) -> Vec<f64> {
+        self.flux_sq.clone()
     }
 
     /// Luminance of the flux sum of a side.
     #[inline]
     pub fn lum(&self, slot: usize) -> f64 {
-        let f = self.sides[slot].flux;
+        let f = self.flux[slot];
         0.2126 * f[0] + 0.7152 * f[1] + 0.0722 * f[2]
     }
 }

@@ -64,25 +64,56 @@
 //!   side's total flux, weighted by the side's screen coverage,
 //!   `SptState::perceived_change`: for a group, what its pilots saw change plus the
 //!   removal of its flagged photons; for a photon, the removal of its stored path), or
-//!   in `random` order (the paper's baseline), or `scratch`: every change empties the
-//!   solution and the pool is shot again from photon 0 (recomputation from scratch with
-//!   the same photons). Measured (`chronolux bench update`, BENCHMARKS.md Issue 11, 300k
-//!   photons, one thread): on a localized edit (`--change nudge`) priority and random
-//!   order re-shoot the same exactly-flagged photons (11.1k), and the visible difference
-//!   lies on sides most of them touch (no visible difference after 86 % of them in
-//!   priority order, 99 % in random order), so the order gains little (0.84–1.34× CPU);
-//!   the gain over scratch is the flagged fraction (31× fewer photons) less the fixed
-//!   costs and a re-shot photon's extra cost: 7.8× CPU (2026-12-08). Measured phases
-//!   (nudge, CPU ms): scan 11.5, keys 4.2, coverage 0.15, trace 23.8, apply 10.1; a
-//!   flagged photon's path is longer (3.77 rays against 2.30 for the pool), which no
-//!   bookkeeping removes.
+//!   in `random` order (the same queue with random keys), or `scratch`: every change
+//!   empties the solution and the pool is shot again from photon 0 (recomputation from
+//!   scratch with the same photons).
+//! - **Which random order**: with the path scan, `random` re-shoots exactly the flagged
+//!   photons, only in another order — it already knows which photons are invalid, so
+//!   against it priority can gain only what the order gains. The paper's random
+//!   baseline re-traces photons without knowing which are invalid; `chronolux bench
+//!   update` measures it separately as `random_pool` (the whole pool in random order,
+//!   each photon removed and re-added), and reports both. Measured (BENCHMARKS.md Issue
+//!   11, 300k photons, one thread, `--change nudge`): priority and random order re-shoot
+//!   the same 11.1k photons, and the visible difference lies on sides most of them touch
+//!   (no visible difference after 86 % of them in priority order, 99 % in random order),
+//!   so the order gains at most ≈ 1.15× in photons and ≈ 1× in CPU (priority also pays
+//!   the coverage and the keys); random over the pool needs ≈ 99 % of the pool to reach
+//!   every invalid photon: 9.9–10.4× the CPU of priority (jump 5.4–5.6×). ≥ 3× over the exact-flag
+//!   `random` would need a change most of whose flagged photons make no visible
+//!   difference (off screen or masked by brighter surroundings) — a property of the
+//!   change, which no order creates; on these rooms it does not hold.
+//! - **Cost of an update** (nudge, CPU ms, 2026-12-08 second run): scan ≈ 10, keys ≈ 3,
+//!   coverage 0.1, trace ≈ 14.5, apply ≈ 7.2, against 267–286 for scratch: 7.7–8.1× (31×
+//!   in photons). A flagged photon's path is longer (3.77 rays against 2.30 for the pool),
+//!   which no bookkeeping removes; the scan reads 300k summaries (2.3 ms) and tests the
+//!   segments of the 85k whose box meets the change (8.5 ms, ≈ 100 ns each, mostly the
+//!   scattered read of their points), of which 3.4k cross it.
 //! - **Cheap scan** (`scan_bounds`, default on): per photon a contiguous
 //!   [`pool::PathSummary`] (padded box of the path, open along its escape ray; instance
 //!   and material masks, exact for ≤ 64 of each) and [`pool::PathPoints`] (the first
 //!   vertices), so the exact tests read the scattered records only for long paths; the
 //!   flags equal the full scan's (tested). The coverage grid keeps its rays and re-traces
 //!   only those a change can affect (equal to a full recomputation, tested); coverage and
-//!   keys are computed only in priority order.
+//!   keys are computed only in priority order; Φ₀ and the side weights of the keys come
+//!   from one pass over the sums.
+//! - **Re-shooting without allocation**: re-shot photons are traced into one vertex
+//!   buffer per batch of 256 ([`pool::TracedBatch`]); the removal reads the old record,
+//!   the addition the batch, and the record's own vertex buffer is overwritten in place
+//!   (it keeps its capacity: no allocation or free per photon) — in the update and in
+//!   scratch alike, which is the baseline and gains about as much (nudge, means of four
+//!   samples: update 39.5 → 35.3 ms, scratch 301 → 280).
+//! - **Tried and not kept** (measured, BENCHMARKS.md Issue 11 and
+//!   `bench-results/2026-12-08-spt2/explore`): (1) an index of the stored segments, cell
+//!   → photon ids, appended when a photon is re-shot, stale entries left for a lazy
+//!   rebuild (3-D DDA; flags equal to the full scan): the nudge's scan fell from 10.6 to
+//!   2.0–3.5 ms (candidates 85k → 6–12k) but entering a re-shot photon's segments cost as
+//!   much (apply + 6–12 ms at 8–24 cells on the long axis), so the update broke even at
+//!   best, and indexing the pool cost about half of shooting it; (2) a 64-bit mask of
+//!   4 × 4 × 4 cells per path summary: candidates 85k → 75k only (the floor cells around
+//!   the block hold most paths' last vertices), + 2 ms in apply; (3) one 64-byte line per
+//!   side for flux, count and Σφ²: no measurable gain in apply, 60 % more memory; (4) a
+//!   padded box per segment before the slab test, and a two-pass scan (summaries, then
+//!   the candidates as independent reads): scan not faster.
 //! - **Restart** (`restart_fraction`, default 0.5): when the scan flags more than this
 //!   fraction of the pool (a lamp moved: all of it), re-shooting each photon (removal,
 //!   addition, key) costs more than shooting the pool again, so the update restarts from

@@ -292,21 +292,69 @@ pub fn trace_record(
     i: u64,
     seed: u64,
 ) -> (PhotonRecord, PhotonStats) {
-    let mut rec = PhotonRecord {
+    let mut verts = Vec::new();
+    let (head, stats) = trace_into(scene, mesh, i, seed, &mut verts);
+    let rec = PhotonRecord {
+        light: head.light,
+        origin: head.origin,
+        vertices: verts,
+        escape: head.escape,
+    };
+    (rec, stats)
+}
+
+/// A path of a [`TracedBatch`]: its light, emission point and escape direction as in a
+/// [`PhotonRecord`], its vertices `verts[start .. start + len]` of the batch.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathHead {
+    pub light: u32,
+    pub origin: Vec3,
+    pub escape: Vec3,
+    pub start: u32,
+    pub len: u32,
+}
+
+/// Paths traced together, all their vertices in one buffer: tracing a batch allocates
+/// per batch, not per photon (what re-shooting stores is copied into the photon's
+/// record in place, [`SptState`]'s `store_traced`).
+#[derive(Clone, Debug, Default)]
+pub struct TracedBatch {
+    pub heads: Vec<PathHead>,
+    pub verts: Vec<RecVertex>,
+}
+
+impl TracedBatch {
+    /// The vertices of path `k`.
+    #[inline]
+    pub fn vertices(&self, k: usize) -> &[RecVertex] {
+        let h = &self.heads[k];
+        &self.verts[h.start as usize..(h.start + h.len) as usize]
+    }
+}
+
+/// Traces photon `i` and appends its vertices to `verts` (what [`trace_record`] records).
+fn trace_into(
+    scene: &FrameScene,
+    mesh: &ElementMesh,
+    i: u64,
+    seed: u64,
+    verts: &mut Vec<RecVertex>,
+) -> (PathHead, PhotonStats) {
+    let mut head = PathHead {
         light: NONE,
         origin: Vec3::ZERO,
-        vertices: Vec::new(),
         escape: Vec3::ZERO,
+        start: verts.len() as u32,
+        len: 0,
     };
-    let mut verts = Vec::new();
     let mut escape = Vec3::ZERO;
     let stats = trace_photon_path(
         scene,
         i,
         seed,
         |l, ray| {
-            rec.light = l as u32;
-            rec.origin = ray.o;
+            head.light = l as u32;
+            head.origin = ray.o;
         },
         |v| {
             let h = &v.hit;
@@ -335,9 +383,39 @@ pub fn trace_record(
         },
         |ray| escape = ray.d,
     );
-    rec.vertices = verts;
-    rec.escape = escape;
-    (rec, stats)
+    head.escape = escape;
+    head.len = verts.len() as u32 - head.start;
+    (head, stats)
+}
+
+/// Traces photons `indices` in parallel into batches (in the order of `indices`: the
+/// batches in order, each path in order within its batch).
+pub fn trace_batches(
+    scene: &FrameScene,
+    mesh: &ElementMesh,
+    indices: &[u64],
+    seed: u64,
+) -> (Vec<TracedBatch>, PhotonStats) {
+    let chunks = parallel::map_chunks(indices.len(), 256, |r| {
+        let mut st = PhotonStats::default();
+        let mut b = TracedBatch {
+            heads: Vec::with_capacity(r.len()),
+            verts: Vec::with_capacity(4 * r.len()),
+        };
+        for &i in &indices[r] {
+            let (h, s) = trace_into(scene, mesh, i, seed, &mut b.verts);
+            st += s;
+            b.heads.push(h);
+        }
+        (b, st)
+    });
+    let mut out = Vec::with_capacity(chunks.len());
+    let mut stats = PhotonStats::default();
+    for (b, s) in chunks {
+        out.push(b);
+        stats += s;
+    }
+    (out, stats)
 }
 
 /// Traces photons `indices` in parallel; records in the order of `indices`.
@@ -421,6 +499,31 @@ impl SignedAccumulators {
         }
     }
 
+    /// Sides (two per element).
+    pub fn len(&self) -> usize {
+        self.flux.len()
+    }
+
+    /// No sides.
+    pub fn is_empty(&self) -> bool {
+        self.flux.is_empty()
+    }
+
+    /// Every side's flux sum.
+    pub fn flux(&self) -> Vec<[f64; 3]> {
+        self.flux.clone()
+    }
+
+    /// Every side's photon count.
+    pub fn count(&self) -> Vec<i64> {
+        self.count.clone()
+    }
+
+    /// Every side's Σ luminance(φ)².
+    pub fn flux_sq(&self) -> Vec<f64> {
+        self.flux_sq.clone()
+    }
+
     /// Luminance of the flux sum of a side.
     #[inline]
     pub fn lum(&self, slot: usize) -> f64 {
@@ -448,7 +551,12 @@ impl Solution {
 
     /// Adds or removes every deposit of a record.
     pub fn apply(&mut self, rec: &PhotonRecord, sign: f64) {
-        for v in &rec.vertices {
+        self.apply_vertices(&rec.vertices, sign);
+    }
+
+    /// Adds or removes every deposit of a path's vertices.
+    pub fn apply_vertices(&mut self, vertices: &[RecVertex], sign: f64) {
+        for v in vertices {
             if v.slot == NONE {
                 continue;
             }
@@ -763,6 +871,21 @@ impl SptState {
         self.records[i] = rec;
     }
 
+    /// Stores path `k` of `batch` as photon `i`'s path, in place: the record keeps its
+    /// vertex buffer (no allocation unless the new path is longer than any before it).
+    #[inline]
+    fn store_traced(&mut self, i: usize, batch: &TracedBatch, k: usize) {
+        let h = batch.heads[k];
+        let r = &mut self.records[i];
+        r.light = h.light;
+        r.origin = h.origin;
+        r.escape = h.escape;
+        r.vertices.clear();
+        r.vertices.extend_from_slice(batch.vertices(k));
+        self.summaries[i] = PathSummary::of(r);
+        self.points[i] = PathPoints::of(r);
+    }
+
     /// Whether the queue holds single photons: [`SptSettings::per_photon`], except during
     /// a scratch restart.
     fn photon_queue(&self) -> bool {
@@ -872,9 +995,16 @@ impl SptState {
         } else if !changes.is_static() {
             let tol = self.settings.path_tolerance;
             let mut change = vec![0.0f64; groups as usize];
-            let phi0 = if keyed { self.flux_floor() } else { 0.0 };
             let mut invalid = vec![false; groups as usize];
             let use_pilots = self.settings.uses_pilots();
+            // Φ₀ of the keys, from the solution before the pilots change it (without
+            // pilots it is taken below from the same per-side totals as the weights).
+            let mut phi0 = 0.0;
+            if keyed && use_pilots {
+                let t = phase_clock();
+                phi0 = flux_floor(&self.side_totals());
+                st.phases.keys += phase_clock() - t;
+            }
             if use_pilots {
                 if keyed {
                     self.update_coverage(changes, &mut st);
@@ -953,7 +1083,11 @@ impl SptState {
                 }
                 let t = phase_clock();
                 let w = if keyed {
-                    self.side_weights(phi0)
+                    let totals = self.side_totals();
+                    if !use_pilots {
+                        phi0 = flux_floor(&totals);
+                    }
+                    self.side_weights(totals, phi0)
                 } else {
                     Vec::new()
                 };
@@ -1198,28 +1332,25 @@ impl SptState {
         out
     }
 
-    /// Per element side, the factor of [`Self::perceived_change`] by which a deposit's
-    /// luminance counts: `(c + c₀) / (Φ + Φ₀)` (for the keys of the path scan, where the
-    /// solution does not change between keys: one read per deposit instead of the four
-    /// of the side's sums and coverage).
-    fn side_weights(&self, phi0: f64) -> Vec<f64> {
+    /// Per element side, the luminance of its total flux sum Φ (direct, indirect and
+    /// caustic): one pass over the sums serves both [`flux_floor`] and
+    /// [`Self::side_weights`].
+    fn side_totals(&self) -> Vec<f64> {
         let sol = &self.solution;
-        (0..sol.direct.flux.len())
-            .map(|k| {
-                let total = sol.direct.lum(k) + sol.indirect.lum(k) + sol.caustic.lum(k);
-                (self.coverage[k] as f64 + 0.1) / (total.max(0.0) + phi0)
-            })
+        (0..sol.direct.len())
+            .map(|k| sol.direct.lum(k) + sol.indirect.lum(k) + sol.caustic.lum(k))
             .collect()
     }
 
-    /// `Φ₀` of [`Self::perceived_change`]: 1 % of the mean flux sum per element side.
-    fn flux_floor(&self) -> f64 {
-        let s = &self.solution;
-        let n = s.direct.flux.len().max(1);
-        let t: f64 = (0..n)
-            .map(|k| s.direct.lum(k) + s.indirect.lum(k) + s.caustic.lum(k))
-            .sum();
-        (0.01 * t / n as f64).max(1e-30)
+    /// Per element side, the factor of [`Self::perceived_change`] by which a deposit's
+    /// luminance counts: `(c + c₀) / (Φ + Φ₀)` (for the keys of the path scan, where the
+    /// solution does not change between keys: one read per deposit instead of the four
+    /// of the side's sums and coverage), from the sides' `totals` ([`Self::side_totals`]).
+    fn side_weights(&self, mut totals: Vec<f64>, phi0: f64) -> Vec<f64> {
+        for (t, c) in totals.iter_mut().zip(&self.coverage) {
+            *t = (*c as f64 + 0.1) / (t.max(0.0) + phi0);
+        }
+        totals
     }
 
     /// Queues `groups` for re-shooting (ahead of every queued group in priority order,
@@ -1329,19 +1460,23 @@ impl SptState {
                 break;
             }
             let t = phase_clock();
-            let (recs, ps) =
-                trace_records(&self.scene, &self.mesh, &indices, self.settings.common.seed);
+            let (batches, ps) =
+                trace_batches(&self.scene, &self.mesh, &indices, self.settings.common.seed);
             st.phases.trace += phase_clock() - t;
             let t = phase_clock();
             st.rays += ps.rays;
             st.photons_traced += indices.len() as u64;
-            for (&i, rec) in indices.iter().zip(recs) {
+            let traced = batches
+                .iter()
+                .flat_map(|b| (0..b.heads.len()).map(move |k| (b, k)));
+            for (&i, (b, k)) in indices.iter().zip(traced) {
                 let g = self.layout.group_of(i) as usize;
                 if self.in_solution[g] {
-                    self.solution.apply(&self.records[i as usize], -1.0);
+                    self.solution
+                        .apply_vertices(&self.records[i as usize].vertices, -1.0);
                 }
-                self.solution.apply(&rec, 1.0);
-                self.store(i as usize, rec);
+                self.solution.apply_vertices(b.vertices(k), 1.0);
+                self.store_traced(i as usize, b, k);
                 self.flagged[i as usize] = false;
             }
             for &g in &groups {
@@ -1394,17 +1529,21 @@ impl SptState {
                 .map(|_| self.queue.pop().expect("queue holds `take` photons") as u64)
                 .collect();
             let t = phase_clock();
-            let (recs, ps) =
-                trace_records(&self.scene, &self.mesh, &indices, self.settings.common.seed);
+            let (batches, ps) =
+                trace_batches(&self.scene, &self.mesh, &indices, self.settings.common.seed);
             st.phases.trace += phase_clock() - t;
             let t = phase_clock();
             st.rays += ps.rays;
             st.photons_traced += indices.len() as u64;
-            for (&i, rec) in indices.iter().zip(recs) {
+            let traced = batches
+                .iter()
+                .flat_map(|b| (0..b.heads.len()).map(move |k| (b, k)));
+            for (&i, (b, k)) in indices.iter().zip(traced) {
                 let i = i as usize;
-                self.solution.apply(&self.records[i], -1.0);
-                self.solution.apply(&rec, 1.0);
-                self.store(i, rec);
+                self.solution
+                    .apply_vertices(&self.records[i].vertices, -1.0);
+                self.solution.apply_vertices(b.vertices(k), 1.0);
+                self.store_traced(i, b, k);
                 self.flagged[i] = false;
                 let g = i % n_groups;
                 self.pending[g] -= 1;
@@ -1543,6 +1682,14 @@ fn coverage_from_rays(rays: &[CoverageRay], elements: usize) -> Vec<f32> {
         }
     }
     c
+}
+
+/// `Φ₀` of [`SptState::perceived_change`]: 1 % of the mean flux sum per element side, from
+/// the sides' totals ([`SptState::side_totals`]).
+fn flux_floor(totals: &[f64]) -> f64 {
+    let n = totals.len().max(1);
+    let t: f64 = totals.iter().sum();
+    (0.01 * t / n as f64).max(1e-30)
 }
 
 /// The perceived change of removing path `rec` ([`SptState::perceived_change`] against an

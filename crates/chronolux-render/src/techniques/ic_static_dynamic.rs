@@ -91,6 +91,18 @@
 //! blur within a pixel) the density estimate was ≈ 7 % cheaper at equal FLIP, which is
 //! why both stay.
 //!
+//! ### The gather estimator
+//! With `pmic.precompute_stride = N > 0` every gather ray (the static cache's, the dynamic
+//! cache's, the correction's and the unstored ones) reads Christensen's precomputed
+//! irradiance of its map instead of a k-NN radiance estimate
+//! ([`crate::kernels::gather::precomputed::PrecomputedMap`], one nearest-neighbour read):
+//! the static map's points are estimated once per segment, the frame map's and the signed
+//! dynamic map's once per frame (a few thousand k-NN estimates, against one per gather ray).
+//! The influence test and the density correction (`correction_m = 0`) stay k-NN estimates
+//! at the records. `pm-ic` defaults to that estimator (with one map per light group; here
+//! one per map); here it is off by default until measured (BENCHMARKS.md, issue 12,
+//! "Whole windows at 256²").
+//!
 //! ## Bias
 //! Where `β = 1` this is `pm-ic`'s estimator on the same photons (same bias, see
 //! [`super`]). Where `β = 0` the static cache's interpolation bias (same bound) is
@@ -112,10 +124,11 @@
 use crate::framework::integrator::{RenderedFrame, render_camera_rays};
 use crate::kernels::gather::irradiance_cache::IrradianceCache;
 use crate::kernels::gather::irradiance_cache::stratum_direction;
-use crate::kernels::gather::photon_map::{PhotonMap, StoredPhoton, cancel_twins};
+use crate::kernels::gather::photon_map::{Lookup, PhotonMap, StoredPhoton, cancel_twins};
+use crate::kernels::gather::precomputed::PrecomputedMap;
 use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource, NoIndirect};
 use crate::kernels::gather::{
-    PmIcSettings, base_cell, caustic_seed, extend_cache, gather_at, gather_ray_hit,
+    PmIcSettings, RadianceMap, base_cell, caustic_seed, extend_cache, gather_at, gather_ray_hit,
     gather_ray_visiting, point_key, probe_points, world_radius,
 };
 use crate::kernels::photon::segment_hits_box;
@@ -385,6 +398,8 @@ struct Segment {
     global_candidates: Vec<u32>,
     caustic_candidates: Vec<u32>,
     map: PhotonMap,
+    /// The static map's precomputed irradiance (`pmic.precompute_stride > 0`).
+    map_pre: Option<PrecomputedMap>,
     cache: IrradianceCache,
     /// The static records again, valid under the fallback accuracy (same order).
     loose: Option<IrradianceCache>,
@@ -407,6 +422,10 @@ struct FramePhotons {
     caustic: PhotonMap,
     /// The frame's global map (`None` when nothing changed: the static map is it).
     frame_map: Option<PhotonMap>,
+    /// The dynamic and the frame's map's precomputed irradiance
+    /// (`pmic.precompute_stride > 0`).
+    dyn_pre: Option<PrecomputedMap>,
+    frame_pre: Option<PrecomputedMap>,
     /// Rays traced: one per vertex, one per escape.
     photon_rays: u64,
 }
@@ -424,6 +443,52 @@ struct DynamicPart {
 }
 
 /// The photons of frame `scene` in segment `seg` (see [`FramePhotons`]).
+/// What the gathers of one map read: its k-NN estimate, or its precomputed irradiance when
+/// `pmic.precompute_stride > 0` (the estimator `pm-ic` defaults to; the maps' other uses,
+/// the influence and the density correction, stay k-NN estimates).
+#[derive(Clone, Copy)]
+enum Reader<'a> {
+    Knn(&'a PhotonMap),
+    Precomputed(&'a PrecomputedMap),
+}
+
+impl<'a> Reader<'a> {
+    fn of(knn: &'a PhotonMap, pre: Option<&'a PrecomputedMap>) -> Self {
+        pre.map_or(Reader::Knn(knn), Reader::Precomputed)
+    }
+}
+
+impl RadianceMap for Reader<'_> {
+    #[inline]
+    fn gather_radiance(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        wo: Vec3,
+        bsdf: &chronolux_core::bsdf::Bsdf,
+        lookup: &Lookup,
+        r_max: f32,
+    ) -> Rgb {
+        match self {
+            Reader::Knn(m) => m.gather_radiance(x, n, wo, bsdf, lookup, r_max),
+            Reader::Precomputed(m) => m.gather_radiance(x, n, wo, bsdf, lookup, r_max),
+        }
+    }
+}
+
+/// `map`'s precomputed irradiance in `scene` when `s.precompute_stride > 0` (every that
+/// many photons, from the global lookup's `k` nearest: [`PrecomputedMap::from_map`]).
+fn precompute(scene: &FrameScene, s: &PmIcSettings, map: &PhotonMap) -> Option<PrecomputedMap> {
+    (s.precompute_stride > 0).then(|| {
+        PrecomputedMap::from_map(
+            map,
+            &s.global,
+            world_radius(scene, &s.global),
+            s.precompute_stride,
+        )
+    })
+}
+
 fn frame_photons(seg: &Segment, scene: &FrameScene, s: &PmIcSettings) -> FramePhotons {
     let n = s.photons;
     // Photons that can differ from their static paths, re-traced in this frame.
@@ -510,10 +575,13 @@ fn frame_photons(seg: &Segment, scene: &FrameScene, s: &PmIcSettings) -> FramePh
         }
         Some(PhotonMap::build(all))
     };
+    let pre = |m: &PhotonMap| precompute(scene, s, m);
     FramePhotons {
         retraced: g_idx.len() + c_idx.len(),
         dynamic_paths,
         negative,
+        dyn_pre: pre(&dyn_map),
+        frame_pre: frame_map.as_ref().and_then(pre),
         dyn_map,
         dyn_gathered,
         caustic,
@@ -528,6 +596,7 @@ struct FrameState {
     dyn_map: PhotonMap,
     /// The frame's global map (`None`: no dynamic photons, it is the static map).
     frame_map: Option<PhotonMap>,
+    frame_pre: Option<PrecomputedMap>,
     caustic: PhotonMap,
     dyn_cache: IrradianceCache,
     dyn_loose: Option<IrradianceCache>,
@@ -599,7 +668,9 @@ impl IcStaticDynamic {
             (all.clone(), all)
         };
         let map = PhotonMap::build(global.hits.iter().map(|t| t.photon).collect());
+        let map_pre = precompute(&scene, s, &map);
         Segment {
+            map_pre,
             first,
             end,
             dynamic_count: dynamic.iter().filter(|d| **d).count(),
@@ -672,6 +743,7 @@ impl IcStaticDynamic {
             scene: scene_arc,
             dyn_map: ph.dyn_map,
             frame_map: ph.frame_map,
+            frame_pre: ph.frame_pre,
             caustic: ph.caustic,
             dyn_cache: dynamic.cache,
             dyn_loose: dynamic.loose,
@@ -710,7 +782,8 @@ impl IcStaticDynamic {
         let all_dynamic = !seg.lights_static;
         let static_before = seg.cache.len();
         {
-            let (static_scene, static_map) = (&seg.scene, &seg.map);
+            let (static_scene, static_map) =
+                (&seg.scene, Reader::of(&seg.map, seg.map_pre.as_ref()));
             let dynamic = &seg.dynamic;
             extend_cache(
                 &mut seg.cache,
@@ -720,7 +793,7 @@ impl IcStaticDynamic {
                     let q = &points[i].1;
                     !(all_dynamic || dynamic.get(q.instance as usize).copied().unwrap_or(true))
                 },
-                |q, k| gather_at(static_scene, s, &[static_map], q.p, q.n, k),
+                |q, k| gather_at(static_scene, s, &[&static_map], q.p, q.n, k),
             );
         }
         if let Some(loose) = &mut seg.loose {
@@ -767,9 +840,12 @@ impl IcStaticDynamic {
             frame: scene,
             static_scene: &seg.scene,
             dynamic: &seg.dynamic,
-            dyn_map: &ph.dyn_map,
-            frame_map: ph.frame_map.as_ref().unwrap_or(&seg.map),
-            static_map: &seg.map,
+            dyn_map: Reader::of(&ph.dyn_map, ph.dyn_pre.as_ref()),
+            frame_map: match &ph.frame_map {
+                Some(m) => Reader::of(m, ph.frame_pre.as_ref()),
+                None => Reader::of(&seg.map, seg.map_pre.as_ref()),
+            },
+            static_map: Reader::of(&seg.map, seg.map_pre.as_ref()),
         };
         let recs = seg.cache.records();
         let (rec_beta, rec_corr): (Vec<f32>, Vec<Rgb>) =
@@ -809,16 +885,16 @@ impl IcStaticDynamic {
             })
             .collect();
         let mut dyn_cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
-        let static_map = &seg.map;
+        let frame_reader = match &ph.frame_map {
+            Some(m) => Reader::of(m, ph.frame_pre.as_ref()),
+            None => Reader::of(&seg.map, seg.map_pre.as_ref()),
+        };
         let dyn_records = extend_cache(
             &mut dyn_cache,
             points,
             &s.cache,
             |i| point_beta[i] > 0.0,
-            |q, k| {
-                let m = ph.frame_map.as_ref().unwrap_or(static_map);
-                gather_at(scene, s, &[m], q.p, q.n, k)
-            },
+            |q, k| gather_at(scene, s, &[&frame_reader], q.p, q.n, k),
         );
         let dyn_loose = seg.loose.as_ref().map(|l| {
             let mut c = IrradianceCache::new(l.accuracy, base_cell(scene));
@@ -841,9 +917,11 @@ impl IcStaticDynamic {
         let seg = self.segment.as_ref().expect("segment made");
         StaticDynamicSource {
             settings: &self.settings.pmic,
-            static_map: &seg.map,
             dynamic_map: &st.dyn_map,
-            frame_map: st.frame_map.as_ref(),
+            frame_reader: match &st.frame_map {
+                Some(m) => Reader::of(m, st.frame_pre.as_ref()),
+                None => Reader::of(&seg.map, seg.map_pre.as_ref()),
+            },
             dynamic_instances: &seg.dynamic,
             all_dynamic: !seg.lights_static,
             static_cache: &seg.cache,
@@ -915,9 +993,9 @@ struct Correction<'a> {
     frame: &'a FrameScene,
     static_scene: &'a FrameScene,
     dynamic: &'a [bool],
-    dyn_map: &'a PhotonMap,
-    frame_map: &'a PhotonMap,
-    static_map: &'a PhotonMap,
+    dyn_map: Reader<'a>,
+    frame_map: Reader<'a>,
+    static_map: Reader<'a>,
 }
 
 impl Correction<'_> {
@@ -943,7 +1021,7 @@ impl Correction<'_> {
                 let l = radiance(gather_ray_visiting(
                     self.frame,
                     s,
-                    &[self.dyn_map],
+                    &[&self.dyn_map],
                     x,
                     n,
                     dir,
@@ -952,9 +1030,16 @@ impl Correction<'_> {
                 ));
                 sum += if touched {
                     let (mut a, mut b) = (start.clone(), start);
-                    let lf = gather_ray_hit(self.frame, s, &[self.frame_map], x, n, dir, &mut a);
-                    let ls =
-                        gather_ray_hit(self.static_scene, s, &[self.static_map], x, n, dir, &mut b);
+                    let lf = gather_ray_hit(self.frame, s, &[&self.frame_map], x, n, dir, &mut a);
+                    let ls = gather_ray_hit(
+                        self.static_scene,
+                        s,
+                        &[&self.static_map],
+                        x,
+                        n,
+                        dir,
+                        &mut b,
+                    );
                     radiance(lf) - radiance(ls)
                 } else {
                     l
@@ -1057,9 +1142,9 @@ fn interpolate_static(
 
 struct StaticDynamicSource<'a> {
     settings: &'a PmIcSettings,
-    static_map: &'a PhotonMap,
     dynamic_map: &'a PhotonMap,
-    frame_map: Option<&'a PhotonMap>,
+    /// What the gathers not stored read (the frame map, or the static map).
+    frame_reader: Reader<'a>,
     dynamic_instances: &'a [bool],
     all_dynamic: bool,
     static_cache: &'a IrradianceCache,
@@ -1087,7 +1172,7 @@ impl StaticDynamicSource<'_> {
         gather_at(
             scene,
             self.settings,
-            &[self.frame_map.unwrap_or(self.static_map)],
+            &[&self.frame_reader],
             q.p,
             q.n,
             point_key(q.p, q.n),
@@ -1170,13 +1255,5 @@ pub static TECHNIQUE: crate::framework::technique::Preset<IcStaticDynamicSetting
         quality: &[],
         defaults: IcStaticDynamicSettings::default,
         common: |s| &mut s.pmic.common,
-        build: |s, _, name| {
-            if s.pmic.precompute_stride != 0 {
-                return Err(format!(
-                    "pmic.precompute_stride = {}: the precomputed estimator is not implemented for {name} (its static, dynamic and signed maps are read by the k-NN estimate); leave it 0",
-                    s.pmic.precompute_stride
-                ));
-            }
-            Ok(Box::new(IcStaticDynamic::new(s, name)))
-        },
+        build: |s, _, name| Ok(Box::new(IcStaticDynamic::new(s, name))),
     };

@@ -6,7 +6,7 @@
 use crate::framework::integrator::{RenderedFrame, render_camera_rays};
 use crate::kernels::gather::irradiance_cache::IrradianceCache;
 use crate::kernels::gather::photon_map::PhotonMap;
-use crate::kernels::gather::precomputed::{GroupMaps, gather_at_groups};
+use crate::kernels::gather::precomputed::{GroupMaps, PrecomputedMap};
 use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource};
 use crate::kernels::gather::*;
 use chronolux_core::color::Rgb;
@@ -67,6 +67,7 @@ impl PmIc {
         }
         // Christensen's precomputed irradiance per light group, as `ic-selective` reads it.
         let groups = GroupMaps::build(scene, s, base, s.precompute_stride, 0);
+        let group_maps: Vec<&PrecomputedMap> = groups.maps.iter().collect();
         let (c, c_rays) = caustic_photons(scene, base..base + s.photons, s.common.seed, s.photons);
         let caustic = PhotonMap::build(c);
         let t_photons = t0.elapsed().as_secs_f64();
@@ -80,13 +81,13 @@ impl PmIc {
             &points,
             &s.cache,
             |_| true,
-            |q, k| gather_at_groups(scene, s, &groups, q.p, q.n, k),
+            |q, k| gather_at(scene, s, &group_maps, q.p, q.n, k),
         );
         let t_cache = t0.elapsed().as_secs_f64() - t_photons;
         let src = PrecomputedSource {
             settings: s,
             cache: &cache,
-            groups: &groups,
+            maps: &group_maps,
             unstored: Default::default(),
         };
         let mut out = self.eye_pass(scene, frame, &caustic, &src, progress);
@@ -128,7 +129,8 @@ impl PmIc {
 struct PrecomputedSource<'a> {
     settings: &'a PmIcSettings,
     cache: &'a IrradianceCache,
-    groups: &'a GroupMaps,
+    /// The light groups' maps, summed by each gather ray.
+    maps: &'a [&'a PrecomputedMap],
     unstored: std::sync::atomic::AtomicU64,
 }
 
@@ -139,10 +141,10 @@ impl IndirectSource for PrecomputedSource<'_> {
         }
         self.unstored
             .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        gather_at_groups(
+        gather_at(
             scene,
             self.settings,
-            self.groups,
+            self.maps,
             q.p,
             q.n,
             point_key(q.p, q.n),

@@ -275,9 +275,11 @@ fn strata_reached_by_a_moving_object_are_recast_in_that_frame() {
                 if t.cast < f {
                     let (d, _) = stratum_dir(&s, &fr, rec.id, k, t.cast);
                     let mut rng = Pcg32::new(0, 0);
-                    let now = gather_ray_hit(&scene, &s, &[], rec.p, rec.n, d, &mut rng)
-                        .map(|(_, dist, inst)| (dist.max(1e-6).to_bits(), inst))
-                        .unwrap_or((f32::INFINITY.to_bits(), Stratum::NO_HIT));
+                    let now = gather_ray_hit::<
+                        chronolux_render::kernels::gather::photon_map::PhotonMap,
+                    >(&scene, &s, &[], rec.p, rec.n, d, &mut rng)
+                    .map(|(_, dist, inst)| (dist.max(1e-6).to_bits(), inst))
+                    .unwrap_or((f32::INFINITY.to_bits(), Stratum::NO_HIT));
                     assert_eq!(
                         now,
                         (t.dist.to_bits(), t.hit),
@@ -598,8 +600,8 @@ fn ic_selective_agrees_with_pm_ic_per_block_under_a_moving_light() {
 
 /// `pm-ic` with the precomputed estimator (`precompute_stride = 4`, the maps `ic-selective`
 /// reads) against `pm-ic`'s k-NN estimate, frames 0 and 6 of the moving-light scene at
-/// 32 × 32: the same photons, camera samples and gather directions and chains
-/// (`gather_keyed`), so only the radiance read at the gather hits differs. Where the
+/// 32 × 32: the same photons, camera samples and gather directions and chains (the same
+/// `gather_at`, generic over what it reads), so only the radiance read at the gather hits differs. Where the
 /// tolerance comes from: the same bound as `ic-selective` against `pm-ic` above (each
 /// image's interpolation and gather noise, ≤ 11 % per block between two caches, plus up to
 /// 7.5 % for the precomputed lookup's wider support), 3 % on the image mean. Measured

@@ -132,11 +132,12 @@ pub struct PmIcSettings {
     /// global map ([`PhotonMap::radiance`]). N > 0: Christensen's precomputed irradiance
     /// at every N-th photon of each light group's map, read by one nearest-neighbour
     /// lookup ([`precomputed`]: the estimator `ic-selective` keeps its strata with, so that
-    /// `pm-ic` with it is that method frame by frame). Only `pm-ic` reads it, and its
-    /// technique defaults set 4 (`techniques::pm_ic::pm_ic_defaults`); this struct's
-    /// default is 0, which the methods that embed these settings keep (they refuse
-    /// another value: `ic-selective` has its own `light_terms` and `precompute_stride`,
-    /// `ic-static-dynamic` reads its maps by the k-NN estimate).
+    /// `pm-ic` with it is that method frame by frame). `pm-ic`'s technique defaults set 4
+    /// (`techniques::pm_ic::pm_ic_defaults`); this struct's default is 0, which the
+    /// methods that embed these settings keep: `ic-static-dynamic` reads its static,
+    /// frame and dynamic maps so when it is set (one precomputed map per map, not per
+    /// light group), `ic-selective` refuses it (its own `light_terms` and
+    /// `precompute_stride` choose).
     pub precompute_stride: u32,
 }
 
@@ -220,14 +221,45 @@ pub fn world_radius(scene: &FrameScene, l: &Lookup) -> f32 {
     l.max_radius * scene.scene_radius.max(1e-6)
 }
 
+/// What a gather ray reads at the first non-delta vertex of its chain: a photon map's k-NN
+/// radiance estimate ([`PhotonMap::radiance`]) or precomputed irradiance
+/// ([`precomputed::PrecomputedMap`]), or either chosen at run time.
+pub trait RadianceMap {
+    /// Radiance reflected towards `wo` by `bsdf` at `x` (side normal `n`).
+    fn gather_radiance(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        wo: Vec3,
+        bsdf: &chronolux_core::bsdf::Bsdf,
+        lookup: &Lookup,
+        r_max: f32,
+    ) -> Rgb;
+}
+
+impl RadianceMap for PhotonMap {
+    #[inline]
+    fn gather_radiance(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        wo: Vec3,
+        bsdf: &chronolux_core::bsdf::Bsdf,
+        lookup: &Lookup,
+        r_max: f32,
+    ) -> Rgb {
+        self.radiance(x, n, wo, bsdf, lookup, r_max)
+    }
+}
+
 /// Radiance arriving at `x` from direction `dir` for a final gather: delta chains are
 /// followed (emission not counted: direct light and caustics are estimated elsewhere) and
 /// the first non-delta hit reads `maps` (summed). Returns (radiance, distance to the
 /// first hit); `None` when nothing is hit.
-pub fn gather_ray(
+pub fn gather_ray<M: RadianceMap + ?Sized>(
     scene: &FrameScene,
     s: &PmIcSettings,
-    maps: &[&PhotonMap],
+    maps: &[&M],
     x: Vec3,
     n: Vec3,
     dir: Vec3,
@@ -237,10 +269,10 @@ pub fn gather_ray(
 }
 
 /// [`gather_ray`] with the instance of the first hit.
-pub fn gather_ray_hit(
+pub fn gather_ray_hit<M: RadianceMap + ?Sized>(
     scene: &FrameScene,
     s: &PmIcSettings,
-    maps: &[&PhotonMap],
+    maps: &[&M],
     x: Vec3,
     n: Vec3,
     dir: Vec3,
@@ -252,10 +284,10 @@ pub fn gather_ray_hit(
 /// [`gather_ray_hit`], calling `visit` with the instance of every vertex of the ray's
 /// chain (the delta vertices and the one whose radiance is read), in order.
 #[allow(clippy::too_many_arguments)]
-pub fn gather_ray_visiting(
+pub fn gather_ray_visiting<M: RadianceMap + ?Sized>(
     scene: &FrameScene,
     s: &PmIcSettings,
-    maps: &[&PhotonMap],
+    maps: &[&M],
     x: Vec3,
     n: Vec3,
     dir: Vec3,
@@ -280,7 +312,7 @@ pub fn gather_ray_visiting(
             let ns = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };
             let mut l = Rgb::ZERO;
             for m in maps {
-                l += m.radiance(si.p, ns, wo, &bsdf, &s.global, r_max);
+                l += m.gather_radiance(si.p, ns, wo, &bsdf, &s.global, r_max);
             }
             let (d, inst) = first.unwrap_or((0.0, si.instance));
             return Some((beta * l, d, inst));
@@ -301,24 +333,13 @@ pub fn gather_ray_visiting(
 }
 
 /// A final gather at (x, n) reading `maps`, its strata jittered from `key`.
-pub fn gather_at(
+pub fn gather_at<M: RadianceMap + ?Sized>(
     scene: &FrameScene,
     s: &PmIcSettings,
-    maps: &[&PhotonMap],
+    maps: &[&M],
     x: Vec3,
     n: Vec3,
     key: u64,
-) -> Gather {
-    gather_keyed(s, n, key, |d, rng| gather_ray(scene, s, maps, x, n, d, rng))
-}
-
-/// The strata of a final gather around `n` whose jitter and ray numbers come from `key`
-/// (the same for every estimator), each traced by `trace(direction, numbers)`.
-pub fn gather_keyed(
-    s: &PmIcSettings,
-    n: Vec3,
-    key: u64,
-    mut trace: impl FnMut(Vec3, &mut Pcg32) -> Option<(Rgb, f32)>,
 ) -> Gather {
     let mut rng = Pcg32::new(hash_words(&[s.common.seed, key]), 0x6761_7468);
     let mut jr = Pcg32::new(hash_words(&[s.common.seed, key, 1]), 0x6a69_7474);
@@ -327,7 +348,7 @@ pub fn gather_keyed(
         s.gather_m,
         s.gather_n,
         |_, _| (jr.next_f32(), jr.next_f32()),
-        |d| trace(d, &mut rng),
+        |d| gather_ray(scene, s, maps, x, n, d, &mut rng),
     )
 }
 

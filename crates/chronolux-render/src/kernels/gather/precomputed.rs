@@ -107,6 +107,30 @@ pub struct PrecomputedMap {
 }
 
 impl PrecomputedMap {
+    /// The irradiance of `map` precomputed at every `stride`-th of its photons (in its
+    /// order), each from `lookup.k` nearest photons with the photon's own normal
+    /// ([`PhotonMap::irradiance`]: the same filter, radius limit and normal tests).
+    pub fn from_map(map: &PhotonMap, lookup: &Lookup, r_max: f32, stride: u32) -> Self {
+        let at: Vec<usize> = (0..map.len()).step_by(stride.max(1) as usize).collect();
+        let est = parallel::map_chunks(at.len(), 256, |r| {
+            at[r]
+                .iter()
+                .map(|&i| {
+                    let p = map.photons()[i];
+                    (p.p, p.n, map.irradiance(p.p, p.n, lookup, r_max))
+                })
+                .collect::<Vec<_>>()
+        });
+        let est: Vec<(Vec3, Vec3, Rgb)> = est.into_iter().flatten().collect();
+        let pts: Vec<[f32; 3]> = est.iter().map(|e| e.0.to_array()).collect();
+        let tree = (!pts.is_empty())
+            .then(|| ImmutableKdTree::new_from_slice(&pts).expect("finite photon positions"));
+        PrecomputedMap {
+            points: est.iter().map(|&(_, n, e)| Point { n, e }).collect(),
+            tree,
+        }
+    }
+
     /// Irradiance of the nearest precomputed point within `r_max` of `x` whose normal
     /// agrees with `n` (`n_p · n ≥ ½`); zero when there is none among the nearest
     /// [`NEAREST_WIDE`]. The nearest point is tried first (one exact nearest-neighbour
@@ -227,26 +251,7 @@ impl GroupMaps {
                     k: if k == 0 { s.global.k } else { k },
                     ..s.global
                 };
-                let map = PhotonMap::build(ph);
-                let at: Vec<usize> = (0..map.len()).step_by(stride).collect();
-                let est = parallel::map_chunks(at.len(), 256, |r| {
-                    at[r]
-                        .iter()
-                        .map(|&i| {
-                            let p = map.photons()[i];
-                            (p.p, p.n, map.irradiance(p.p, p.n, &lookup, r_max))
-                        })
-                        .collect::<Vec<_>>()
-                });
-                let est: Vec<(Vec3, Vec3, Rgb)> = est.into_iter().flatten().collect();
-                let pts: Vec<[f32; 3]> = est.iter().map(|e| e.0.to_array()).collect();
-                let tree = (!pts.is_empty()).then(|| {
-                    ImmutableKdTree::new_from_slice(&pts).expect("finite photon positions")
-                });
-                PrecomputedMap {
-                    points: est.iter().map(|&(_, n, e)| Point { n, e }).collect(),
-                    tree,
-                }
+                PrecomputedMap::from_map(&PhotonMap::build(ph), &lookup, r_max, stride as u32)
             })
             .collect();
         GroupMaps {
@@ -346,20 +351,19 @@ pub fn gather_hit(
     })
 }
 
-/// A final gather at (x, n) reading the light groups' maps `maps`: [`super::gather_at`]'s
-/// strata, jitter and delta chains (the same numbers drawn), each stratum's radiance the
-/// sum of the groups' terms at the vertex read ([`GroupMaps::term`]), as `ic-selective`
-/// casts a record's strata.
-pub fn gather_at_groups(
-    scene: &FrameScene,
-    s: &PmIcSettings,
-    maps: &GroupMaps,
-    x: Vec3,
-    n: Vec3,
-    key: u64,
-) -> super::Gather {
-    super::gather_keyed(s, n, key, |d, rng| {
-        gather_hit(scene, s, x, n, d, rng)
-            .map(|h| ((0..maps.groups()).map(|g| maps.term(g, &h)).sum(), h.dist))
-    })
+impl super::RadianceMap for PrecomputedMap {
+    /// `f(wo, n) · E(x)`: the radiance [`GroupMaps::term`] reads (exact for a Lambertian
+    /// surface, see the module doc).
+    #[inline]
+    fn gather_radiance(
+        &self,
+        x: Vec3,
+        n: Vec3,
+        wo: Vec3,
+        bsdf: &chronolux_core::bsdf::Bsdf,
+        _lookup: &Lookup,
+        r_max: f32,
+    ) -> Rgb {
+        bsdf.f(wo, n, TransportMode::Radiance) * self.irradiance(x, n, r_max)
+    }
 }

@@ -329,7 +329,7 @@ impl QuantGrid {
         let t = ((p - self.lo) * self.inv).round();
         (0..3)
             .all(|k| t[k] >= 0.0 && t[k] <= 65535.0)
-            .then(|| [t.x as u16, t.y as u16, t.z as u16])
+            .then_some([t.x as u16, t.y as u16, t.z as u16])
     }
 
     /// Where the ray from `a` (inside the grid box) along `d` leaves the grid box, on the

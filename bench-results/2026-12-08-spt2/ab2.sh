@@ -1,5 +1,5 @@
 #!/bin/bash
-# Second interleaved A/B of `chronolux bench update` (the final code), one thread, CPU
+# Second interleaved A/B of `chronolux bench update` (the code at c79a675), one thread, CPU
 # clock (clock_gettime(CLOCK_PROCESS_CPUTIME_ID), as the bench reads it).
 #   A = main at 76794e4 (the starting commit), --profile ci
 #   B = c79a675 (branch work of /work/hspt2), --profile ci: allocation-free re-shooting, keys

@@ -625,3 +625,92 @@ fn the_culled_scan_flags_exactly_what_the_full_scan_flags() {
         assert_eq!(cov, screen_coverage(last, &mesh, COVERAGE_GRID));
     }
 }
+
+/// The summaries' quantized points never rule out a crossing the exact test accepts: for
+/// 10 000 random paths (one to eight vertices, every fifth with an escape ray) and 1 000
+/// random boxes inside the grid, with a third of the coordinates snapped onto the same
+/// few values (so segments run along box faces, where rounding would show), every path
+/// that `crosses` a box passes [`QuantGrid::may_cross`] on that box grown by
+/// [`QuantGrid::grow`], and the test rules out most of the paths that do not cross (it is
+/// not vacuous). Exact: a superset property, no tolerance.
+#[test]
+fn the_quantized_summary_keeps_every_crossing_of_the_exact_test() {
+    use chronolux_core::geometry::Bounds3;
+    use chronolux_core::math::Vec3;
+    use chronolux_core::sampling::hash_words;
+    use chronolux_render::techniques::spt::pool::{
+        PathSummary, PhotonRecord, QuantGrid, RecVertex,
+    };
+    let mut n = 0u64;
+    let mut next = move || {
+        n += 1;
+        (hash_words(&[n, 0x5eed]) >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let mut point = |lo: f32, hi: f32, snap: bool| {
+        let mut c = || {
+            let x = lo + (hi - lo) * next();
+            if snap { (x * 4.0).round() / 4.0 } else { x }
+        };
+        Vec3::new(c(), c(), c())
+    };
+    let vertex = |p: Vec3| RecVertex {
+        p,
+        instance: 0,
+        material: 0,
+        tri: chronolux_core::accel::TriRef {
+            geometry: 0,
+            triangle: 0,
+        },
+        slot: 0,
+        kind: 1,
+        power: chronolux_core::color::Rgb::splat(1.0),
+    };
+    let recs: Vec<PhotonRecord> = (0..10_000u64)
+        .map(|k| {
+            let snap = k % 3 == 0;
+            PhotonRecord {
+                light: 0,
+                origin: point(-1.0, 1.0, snap),
+                vertices: (0..1 + (k % 8) as usize)
+                    .map(|_| vertex(point(-1.0, 1.0, snap)))
+                    .collect(),
+                escape: if k % 5 == 0 {
+                    point(-1.0, 1.0, false)
+                } else {
+                    Vec3::ZERO
+                },
+            }
+        })
+        .collect();
+    let grid = QuantGrid::over(&recs);
+    let sums: Vec<PathSummary> = recs
+        .iter()
+        .map(|r| PathSummary::of(r, Some(&grid)))
+        .collect();
+    assert!(sums.iter().all(|s| s.quantized));
+    let (mut crossing, mut ruled_out, mut missing) = (0u64, 0u64, 0u64);
+    for k in 0..1_000u64 {
+        let (a, b) = (point(-0.9, 0.9, k % 3 == 0), point(-0.9, 0.9, k % 3 == 0));
+        let bx = Bounds3 {
+            min: a.min(b),
+            max: a.max(b),
+        };
+        let grown = [grid.grow(&bx)];
+        assert!(grid.contains(&grown[0]));
+        for (r, s) in recs.iter().zip(&sums) {
+            let may = grid.may_cross(s, &grown);
+            if r.crosses(&[bx]) {
+                crossing += 1;
+                assert!(may, "{r:?} crosses {bx:?} but its quantized points do not");
+            } else {
+                missing += 1;
+                ruled_out += !may as u64;
+            }
+        }
+    }
+    assert!(crossing > 10_000, "{crossing} crossings");
+    assert!(
+        ruled_out as f64 > 0.9 * missing as f64,
+        "{ruled_out} of {missing} ruled out"
+    );
+}

@@ -78,24 +78,30 @@
 //!   (no visible difference after 86 % of them in priority order, 99 % in random order),
 //!   so the order gains at most ≈ 1.15× in photons and ≈ 1× in CPU (priority also pays
 //!   the coverage and the keys); random over the pool needs ≈ 99 % of the pool to reach
-//!   every invalid photon: 9.9–10.4× the CPU of priority (jump 5.4–5.6×). ≥ 3× over the exact-flag
-//!   `random` would need a change most of whose flagged photons make no visible
-//!   difference (off screen or masked by brighter surroundings) — a property of the
-//!   change, which no order creates; on these rooms it does not hold.
-//! - **Cost of an update** (nudge, CPU ms, 2026-12-08 second run): scan ≈ 10, keys ≈ 3,
-//!   coverage 0.1, trace ≈ 14.5, apply ≈ 7.2, against 267–286 for scratch: 7.7–8.1× (31×
-//!   in photons). A flagged photon's path is longer (3.77 rays against 2.30 for the pool),
-//!   which no bookkeeping removes; the scan reads 300k summaries (2.3 ms) and tests the
-//!   segments of the 85k whose box meets the change (8.5 ms, ≈ 100 ns each, mostly the
-//!   scattered read of their points), of which 3.4k cross it.
+//!   every invalid photon: 11.4× the CPU of priority (jump 5.1–5.5×). ≥ 3× over the
+//!   exact-flag `random` would need a change most of whose flagged photons make no
+//!   visible difference (off screen or masked by brighter surroundings) — a property of
+//!   the change, which no order creates; on these rooms it does not hold.
+//! - **Cost of an update** (nudge, CPU ms, 2026-12-08 second run, third A/B): scan
+//!   7.9–8.5, keys 2.9, coverage 0.1, trace 14.1–14.4, apply 7.9–8.4 (33.6 in all),
+//!   against 267–278 for scratch: 7.9–8.3× (31× in photons). A flagged photon's path is
+//!   longer (3.77 rays against 2.30 for the pool), which no bookkeeping removes. Of the
+//!   scan, most is now one pass over the 300k summaries (112 B each) with their quantized
+//!   segment tests; 5.4k paths reach the exact test, ≈ 450 ns each for those that read
+//!   their scattered record.
 //! - **Cheap scan** (`scan_bounds`, default on): per photon a contiguous
 //!   [`pool::PathSummary`] (padded box of the path, open along its escape ray; instance
-//!   and material masks, exact for ≤ 64 of each) and [`pool::PathPoints`] (the first
-//!   vertices), so the exact tests read the scattered records only for long paths; the
-//!   flags equal the full scan's (tested). The coverage grid keeps its rays and re-traces
-//!   only those a change can affect (equal to a full recomputation, tested); coverage and
-//!   keys are computed only in priority order; Φ₀ and the side weights of the keys come
-//!   from one pass over the sums.
+//!   and material masks, exact for ≤ 64 of each; its points — up to 8 vertices and an
+//!   escape ray's exit from the grid box — on a 16-bit [`pool::QuantGrid`]) and
+//!   [`pool::PathPoints`] (the first vertices, in `f32`). The scan tests the quantized
+//!   segments against the changed bounds grown by two grid steps (a point moves by at
+//!   most half a step), all within the one sequential read of the summaries, and reads
+//!   the scattered points or record only for the paths that test cannot rule out (nudge:
+//!   5.4k of 300k, from 85k with the box alone); the flags equal the full scan's (tested,
+//!   and a brute-force test that the quantized test never rules out a crossing). The
+//!   coverage grid keeps its rays and re-traces only those a change can affect (equal to
+//!   a full recomputation, tested); coverage and keys are computed only in priority
+//!   order; Φ₀ and the side weights of the keys come from one pass over the sums.
 //! - **Re-shooting without allocation**: re-shot photons are traced into one vertex
 //!   buffer per batch of 256 ([`pool::TracedBatch`]); the removal reads the old record,
 //!   the addition the batch, and the record's own vertex buffer is overwritten in place
@@ -113,7 +119,9 @@
 //!   the block hold most paths' last vertices), + 2 ms in apply; (3) one 64-byte line per
 //!   side for flux, count and Σφ²: no measurable gain in apply, 60 % more memory; (4) a
 //!   padded box per segment before the slab test, and a two-pass scan (summaries, then
-//!   the candidates as independent reads): scan not faster.
+//!   the candidates as independent reads): scan not faster; (5) `PATH_POINTS` 8: scan
+//!   − 0.8 ms, within the noise of the whole update, for 36 B more per photon (the
+//!   quantized points do it better).
 //! - **Restart** (`restart_fraction`, default 0.5): when the scan flags more than this
 //!   fraction of the pool (a lamp moved: all of it), re-shooting each photon (removal,
 //!   addition, key) costs more than shooting the pool again, so the update restarts from

@@ -126,12 +126,28 @@ pub struct PathSummary {
     /// Vertices of the path (the points of its [`PathPoints`] when at most
     /// [`PATH_POINTS`] − 1).
     pub vertices: u32,
+    /// The emission point, the vertices and, for a path that escapes, the point where its
+    /// escape ray leaves the grid box, on the state's [`QuantGrid`] (when `quantized`).
+    pub q: [[u16; 3]; QUANT_POINTS + 1],
+    /// `q` holds every point of the path (at most `QUANT_POINTS − 1` vertices, all inside
+    /// the grid): the scan can rule its segments out from the summary alone
+    /// ([`QuantGrid::may_cross`]).
+    pub quantized: bool,
+    /// The path ends in an escape ray (its last point in `q` is the ray's exit from the
+    /// grid box: beyond it the ray can cross only bounds that leave the box).
+    pub escapes: bool,
 }
 
 /// Points of a [`PathPoints`]: the emission point and the first `PATH_POINTS − 1`
 /// vertices (most paths have fewer: 2.3 vertices on average in the demo, 3.8 among the
 /// photons a localized change flags).
 pub const PATH_POINTS: usize = 5;
+
+/// Points of a path a [`PathSummary`] holds on the [`QuantGrid`] (the emission point and
+/// up to `QUANT_POINTS − 1` vertices, plus an escape ray's exit): longer than
+/// [`PathPoints`], because a path the summary cannot rule out costs a scattered read of
+/// its record (long paths are the ones whose boxes meet a change).
+pub const QUANT_POINTS: usize = 9;
 
 /// The points of a stored path the segment test reads, beside the records in one
 /// contiguous array (read only for the paths whose [`PathSummary`] box meets a changed
@@ -189,7 +205,8 @@ fn crosses_from(s: &PathSummary, pts: &PathPoints, rec: &PhotonRecord, boxes: &[
 pub const SUMMARY_PAD: (f32, f32) = (1e-4, 1e-5);
 
 impl PathSummary {
-    pub fn of(rec: &PhotonRecord) -> PathSummary {
+    /// The summary of `rec`, its points on `quant` (none without it).
+    pub fn of(rec: &PhotonRecord, quant: Option<&QuantGrid>) -> PathSummary {
         let mut s = PathSummary {
             lo: Vec3::splat(f32::INFINITY),
             hi: Vec3::splat(f32::NEG_INFINITY),
@@ -197,9 +214,32 @@ impl PathSummary {
             materials: 0,
             light: rec.light,
             vertices: rec.vertices.len() as u32,
+            q: [[0; 3]; QUANT_POINTS + 1],
+            quantized: false,
+            escapes: rec.escape != Vec3::ZERO,
         };
         if rec.light == NONE {
             return s;
+        }
+        if let Some(g) = quant
+            && rec.vertices.len() < QUANT_POINTS
+        {
+            s.quantized = true;
+            let pts = std::iter::once(rec.origin).chain(rec.vertices.iter().map(|v| v.p));
+            let mut last = rec.origin;
+            for (k, p) in pts.enumerate() {
+                match g.quantize(p) {
+                    Some(q) => s.q[k] = q,
+                    None => s.quantized = false,
+                }
+                last = p;
+            }
+            if s.escapes {
+                match g.exit(last, rec.escape) {
+                    Some(q) => s.q[rec.vertices.len() + 1] = q,
+                    None => s.quantized = false,
+                }
+            }
         }
         s.lo = rec.origin;
         s.hi = rec.origin;
@@ -238,6 +278,129 @@ impl PathSummary {
                 && self.lo.z <= b.max.z
                 && self.hi.z >= b.min.z
         })
+    }
+}
+
+/// A 16-bit grid over the box of the stored paths for the points of a [`PathSummary`]: the
+/// scan tests a candidate's segments on these points (inside the summary, which it reads
+/// anyway, one sequential pass) against the changed bounds grown by [`QuantGrid::grow`],
+/// and reads its scattered [`PathPoints`] for the exact test only when that cannot rule
+/// it out. Conservative: a point is moved by at most half a step per axis by rounding to
+/// the grid (points outside it are not quantized), so every point of a true segment lies
+/// within half a step (per axis) of the quantized segment; the boxes grow by two steps
+/// plus [`SUMMARY_PAD`], which also covers the slab test's own rounding on both sides.
+/// Not kept in `scratch` order (which does not scan).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QuantGrid {
+    lo: Vec3,
+    step: Vec3,
+    inv: Vec3,
+}
+
+impl QuantGrid {
+    /// The grid over the box of the records' points, padded by 1 % of its diagonal.
+    pub fn over(records: &[PhotonRecord]) -> QuantGrid {
+        let mut b = Bounds3::EMPTY;
+        for r in records.iter().filter(|r| r.light != NONE) {
+            b.grow(r.origin);
+            for v in &r.vertices {
+                b.grow(v.p);
+            }
+        }
+        if b.is_empty() {
+            b = Bounds3 {
+                min: Vec3::splat(-1.0),
+                max: Vec3::splat(1.0),
+            };
+        }
+        let m = Vec3::splat(0.01 * b.diagonal().length().max(1e-3));
+        let (lo, hi) = (b.min - m, b.max + m);
+        let step = (hi - lo) / 65535.0;
+        QuantGrid {
+            lo,
+            step,
+            inv: Vec3::ONE / step,
+        }
+    }
+
+    /// `p` on the grid (nearest grid point), `None` outside it (or not finite).
+    #[inline]
+    pub fn quantize(&self, p: Vec3) -> Option<[u16; 3]> {
+        let t = ((p - self.lo) * self.inv).round();
+        (0..3)
+            .all(|k| t[k] >= 0.0 && t[k] <= 65535.0)
+            .then_some([t.x as u16, t.y as u16, t.z as u16])
+    }
+
+    /// Where the ray from `a` (inside the grid box) along `d` leaves the grid box, on the
+    /// grid (clamped: the computed exit may round a hair outside); `None` when `a` is
+    /// outside or `d` has a NaN component.
+    pub fn exit(&self, a: Vec3, d: Vec3) -> Option<[u16; 3]> {
+        self.quantize(a)?;
+        let hi = self.lo + self.step * 65535.0;
+        let mut t = f32::INFINITY;
+        for k in 0..3 {
+            if d[k].is_nan() {
+                return None;
+            }
+            if d[k] > 0.0 {
+                t = t.min((hi[k] - a[k]) / d[k]);
+            } else if d[k] < 0.0 {
+                t = t.min((self.lo[k] - a[k]) / d[k]);
+            }
+        }
+        if !t.is_finite() {
+            return None;
+        }
+        let p = ((a + d * t.max(0.0) - self.lo) * self.inv).round();
+        let c = |x: f32| x.clamp(0.0, 65535.0) as u16;
+        Some([c(p.x), c(p.y), c(p.z)])
+    }
+
+    /// Every point of `b` lies strictly inside the grid box.
+    pub fn contains(&self, b: &Bounds3) -> bool {
+        let hi = self.lo + self.step * 65535.0;
+        (0..3).all(|k| b.min[k] > self.lo[k] && b.max[k] < hi[k])
+    }
+
+    /// The grid point `q`.
+    #[inline]
+    pub fn point(&self, q: [u16; 3]) -> Vec3 {
+        self.lo + Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32) * self.step
+    }
+
+    /// `b` grown by two grid steps and [`SUMMARY_PAD`] of its coordinates per axis.
+    pub fn grow(&self, b: &Bounds3) -> Bounds3 {
+        let m = b.min.abs().max(b.max.abs());
+        let g = self.step * 2.0 + Vec3::splat(SUMMARY_PAD.0) + m * SUMMARY_PAD.1;
+        Bounds3 {
+            min: b.min - g,
+            max: b.max + g,
+        }
+    }
+
+    /// Some segment of the quantized path of `s` (which must be `quantized`) passes
+    /// through one of `grown` (boxes grown by [`QuantGrid::grow`], for an escaping path
+    /// all inside the grid box): false only when no segment of the true path can cross
+    /// the ungrown boxes (the escape ray's part inside the grid box is the segment to its
+    /// exit point; beyond it the ray is outside every grown box).
+    #[inline]
+    pub fn may_cross(&self, s: &PathSummary, grown: &[Bounds3]) -> bool {
+        let n = s.vertices as usize + s.escapes as usize;
+        let mut a = self.point(s.q[0]);
+        for q in &s.q[1..=n] {
+            let v = self.point(*q);
+            // The segment's box first (exact comparisons: a segment lies in its box), the
+            // slab test only for the segments whose box meets a grown bound.
+            let (lo, hi) = (a.min(v), a.max(v));
+            if grown.iter().any(|b| {
+                lo.cmple(b.max).all() && hi.cmpge(b.min).all() && segment_hits_box(a, v - a, 1.0, b)
+            }) {
+                return true;
+            }
+            a = v;
+        }
+        false
     }
 }
 
@@ -747,6 +910,8 @@ pub struct SptState {
     /// Photon `i`'s [`PathSummary`] and [`PathPoints`] (of `records[i]`).
     summaries: Vec<PathSummary>,
     points: Vec<PathPoints>,
+    /// The grid of the summaries' points (`None` in `scratch` order, which does not scan).
+    quant: Option<QuantGrid>,
     pub solution: Solution,
     /// Per group: its photons are in the solution (false only while a scratch restart
     /// has not reached it).
@@ -810,8 +975,13 @@ impl SptState {
             .clamp(1, layout.members);
         let indices: Vec<u64> = (0..n).collect();
         let (records, _) = trace_records(&scene, &mesh, &indices, settings.common.seed);
+        let quant = (settings.scan_paths && settings.order != Order::Scratch)
+            .then(|| QuantGrid::over(&records));
         let summaries = parallel::map_chunks(records.len(), 8192, |r| {
-            records[r].iter().map(PathSummary::of).collect::<Vec<_>>()
+            records[r]
+                .iter()
+                .map(|rec| PathSummary::of(rec, quant.as_ref()))
+                .collect::<Vec<_>>()
         })
         .into_iter()
         .flatten()
@@ -836,6 +1006,7 @@ impl SptState {
             records,
             summaries,
             points,
+            quant,
             solution,
             in_solution: vec![true; g],
             photons_in_solution: n,
@@ -866,7 +1037,7 @@ impl SptState {
     /// Stores `rec` as photon `i`'s path (and its summary).
     #[inline]
     fn store(&mut self, i: usize, rec: PhotonRecord) {
-        self.summaries[i] = PathSummary::of(&rec);
+        self.summaries[i] = PathSummary::of(&rec, self.quant.as_ref());
         self.points[i] = PathPoints::of(&rec);
         self.records[i] = rec;
     }
@@ -882,7 +1053,7 @@ impl SptState {
         r.escape = h.escape;
         r.vertices.clear();
         r.vertices.extend_from_slice(batch.vertices(k));
-        self.summaries[i] = PathSummary::of(r);
+        self.summaries[i] = PathSummary::of(r, self.quant.as_ref());
         self.points[i] = PathPoints::of(r);
     }
 
@@ -1186,10 +1357,12 @@ impl SptState {
     /// array: a path whose instance and material masks miss every changed one and whose
     /// (padded) box overlaps no changed bound can neither touch nor cross the change; with
     /// at most 64 instances and materials the masks answer `touches` exactly. Only the
-    /// paths whose box meets a changed bound (`candidates`) go on to the exact segment
-    /// test, on their [`PathPoints`] (another contiguous array; the scattered record only
-    /// for paths of more than `PATH_POINTS − 1` vertices) — the flags are those of the
-    /// full scan (tested against it).
+    /// paths whose box meets a changed bound, and (for paths of at most `QUANT_POINTS −
+    /// 1` vertices) one of whose quantized segments meets it grown by
+    /// [`QuantGrid::grow`] ([`QuantGrid::may_cross`], from the summary too), go on
+    /// (`candidates`) to the exact segment test, on their [`PathPoints`] (another
+    /// contiguous array; the scattered record only for paths of more than `PATH_POINTS −
+    /// 1` vertices) — the flags are those of the full scan (tested against it).
     fn scan(
         &self,
         changes: &FrameDelta,
@@ -1200,6 +1373,17 @@ impl SptState {
         let z = self.records.len();
         let cull = self.settings.scan_bounds;
         let masks = ChangeMasks::new(changes, &self.scene, selection_changed);
+        // The changed bounds grown for the quantized points of the summaries.
+        let grown: Vec<Bounds3> = match &self.quant {
+            Some(g) => boxes.iter().map(|b| g.grow(b)).collect(),
+            None => Vec::new(),
+        };
+        // An escaping path's quantized points end where its ray leaves the grid box, which
+        // answers only for bounds inside the box.
+        let inside = self
+            .quant
+            .as_ref()
+            .is_some_and(|g| grown.iter().all(|b| g.contains(b)));
         let chunks = parallel::map_chunks(z, 8192, |r| {
             let mut candidates = 0u64;
             let hits = r
@@ -1217,7 +1401,10 @@ impl SptState {
                     if may_touch && masks.exact {
                         return true;
                     }
-                    let may_cross = s.overlaps_any(&boxes);
+                    let may_cross = s.overlaps_any(&boxes)
+                        && !(s.quantized
+                            && (inside || !s.escapes)
+                            && self.quant.as_ref().is_some_and(|g| !g.may_cross(s, &grown)));
                     if !(may_touch || may_cross) {
                         return false;
                     }

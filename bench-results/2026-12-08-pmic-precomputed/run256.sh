@@ -7,7 +7,7 @@ BIN=${BIN:-chronolux}
 REFS=${REFS:-/work/refs256}
 OUT=${OUT:-$(dirname "$0")}
 C="/work/shared/peers/cornell-moving.glb --frames 0..48 --measure 0..8,12,24,36,47 --reference $REFS --target-flip 0.05 --threads 1 --json"
-for e in 25 50; do
+for e in ${EFFORTS:-25 50}; do
   uptime > "$OUT/pm-ic-pre-256-$e.uptime"
   $BIN bench quality $C --method pm-ic --set precompute_stride=4 --start-effort $e --max-effort $e > "$OUT/pm-ic-pre-256-$e.json" 2> "$OUT/pm-ic-pre-256-$e.log"
   uptime >> "$OUT/pm-ic-pre-256-$e.uptime"

@@ -498,10 +498,11 @@ fn ic_static_dynamic_agrees_with_pm_ic_per_frame_on_a_moving_cube() {
     }
 }
 
-/// Bit-identical frames of `ic-static-dynamic` for 1 and 2 threads, with either correction.
+/// Bit-identical frames of `ic-static-dynamic` for 1 and 2 threads, with either correction
+/// and either gather estimator.
 #[test]
 fn ic_static_dynamic_is_deterministic_across_thread_counts() {
-    for correction_m in [0, 4] {
+    for (correction_m, stride) in [(0, 0), (4, 0), (4, 4)] {
         let render = |threads: usize| {
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
@@ -517,6 +518,7 @@ fn ic_static_dynamic_is_deterministic_across_thread_counts() {
                                 },
                                 photons: 20_000,
                                 fixed_photons: true,
+                                precompute_stride: stride,
                                 ..Default::default()
                             },
                             segment: 2,
@@ -532,7 +534,7 @@ fn ic_static_dynamic_is_deterministic_across_thread_counts() {
         for (x, y) in a.iter().zip(&b) {
             assert!(
                 bits(&x.pixels) == bits(&y.pixels),
-                "correction_m {correction_m}"
+                "correction_m {correction_m}, stride {stride}"
             );
         }
     }

@@ -133,10 +133,10 @@ pub struct PmIcSettings {
     /// at every N-th photon of each light group's map, read by one nearest-neighbour
     /// lookup ([`precomputed`]: the estimator `ic-selective` keeps its strata with, so that
     /// `pm-ic` with it is that method frame by frame). `pm-ic`'s technique defaults set 4
-    /// (`techniques::pm_ic::pm_ic_defaults`); this struct's default is 0, which the
-    /// methods that embed these settings keep: `ic-static-dynamic` reads its static,
-    /// frame and dynamic maps so when it is set (one precomputed map per map, not per
-    /// light group), `ic-selective` refuses it (its own `light_terms` and
+    /// (`techniques::pm_ic::pm_ic_defaults`), and so do `ic-static-dynamic`'s, which
+    /// reads its static, frame and dynamic maps so (one precomputed map per map, not per
+    /// light group); this struct's default is 0 (the tests that build the methods from it
+    /// keep the k-NN estimate). `ic-selective` refuses a value (its own `light_terms` and
     /// `precompute_stride` choose).
     pub precompute_stride: u32,
 }

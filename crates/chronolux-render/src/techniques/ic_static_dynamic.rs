@@ -92,19 +92,26 @@
 //! why both stay.
 //!
 //! ### The gather estimator
-//! With `pmic.precompute_stride = N > 0` every gather ray (the static cache's, the dynamic
-//! cache's, the correction's and the unstored ones) reads Christensen's precomputed
-//! irradiance of its map instead of a k-NN radiance estimate
+//! With `pmic.precompute_stride = N > 0` the gather rays that read the static or the
+//! frame's map (the static cache's, the dynamic cache's, the unstored ones and the
+//! correction's strata that meet the moving object) read Christensen's precomputed
+//! irradiance of that map instead of a k-NN radiance estimate
 //! ([`crate::kernels::gather::precomputed::PrecomputedMap`], one nearest-neighbour read):
-//! the static map's points are estimated once per segment, the frame map's and the signed
-//! dynamic map's once per frame (a few thousand k-NN estimates, against one per gather ray).
-//! The influence test and the density correction (`correction_m = 0`) stay k-NN estimates
-//! at the records. It is the default (`precompute_stride = 4`), as `pm-ic`'s (which keeps
-//! one map per light group; here one per map). Measured (BENCHMARKS.md, issue 12, "Whole
-//! windows at 256²"; cornell-moving, whole animation, 256²): 25k photons give FLIP 0.0793
-//! for 9.6 CPU s per 12 frames against the k-NN estimate's 0.0839 for 22 s, and
-//! 1.36–1.51× less CPU than `pm-ic` with its precomputed estimator at equal FLIP (with the
-//! k-NN estimate: 0.48–0.49×).
+//! the static map's points are estimated once per segment, the frame map's once per frame
+//! (a few thousand k-NN estimates, against one per gather ray). The correction's reads of
+//! the **dynamic** map stay k-NN: that map is sparse, and the nearest precomputed point
+//! hands a photon's density to any hit up to the lookup radius away, so the correction
+//! spread into blotches (measured at 64², cornell-moving, 24k photons: FLIP 0.0998 and
+//! 8.2 CPU s with it precomputed, 0.0844 and 4.6 s with k-NN, where most lookups find no
+//! photon and end early). The influence test and the density correction
+//! (`correction_m = 0`) stay k-NN estimates at the records.
+//!
+//! It is the default (`precompute_stride = 4`), as `pm-ic`'s (which keeps one map per
+//! light group; here one per map). Measured (BENCHMARKS.md, issue 12, "Whole windows at
+//! 256²"; cornell-moving, whole animation, 256²): 25k photons give FLIP 0.0785 for 11.2 CPU
+//! s per 12 frames against the k-NN estimate's 0.0839 for 22 s, and 1.09–1.42× less CPU
+//! than `pm-ic` with its precomputed estimator at equal FLIP (1.36–2.17× at 64² over one
+//! segment; with the k-NN estimate against it: 0.48–0.49× at 256²).
 //!
 //! ## Bias
 //! Where `β = 1` this is `pm-ic`'s estimator on the same photons (same bias, see
@@ -428,9 +435,7 @@ struct FramePhotons {
     caustic: PhotonMap,
     /// The frame's global map (`None` when nothing changed: the static map is it).
     frame_map: Option<PhotonMap>,
-    /// The dynamic and the frame's map's precomputed irradiance
-    /// (`pmic.precompute_stride > 0`).
-    dyn_pre: Option<PrecomputedMap>,
+    /// The frame's map's precomputed irradiance (`pmic.precompute_stride > 0`).
     frame_pre: Option<PrecomputedMap>,
     /// Rays traced: one per vertex, one per escape.
     photon_rays: u64,
@@ -586,7 +591,6 @@ fn frame_photons(seg: &Segment, scene: &FrameScene, s: &PmIcSettings) -> FramePh
         retraced: g_idx.len() + c_idx.len(),
         dynamic_paths,
         negative,
-        dyn_pre: pre(&dyn_map),
         frame_pre: frame_map.as_ref().and_then(pre),
         dyn_map,
         dyn_gathered,
@@ -846,7 +850,9 @@ impl IcStaticDynamic {
             frame: scene,
             static_scene: &seg.scene,
             dynamic: &seg.dynamic,
-            dyn_map: Reader::of(&ph.dyn_map, ph.dyn_pre.as_ref()),
+            // The sparse signed dynamic map stays a k-NN estimate (module doc, "The gather
+            // estimator").
+            dyn_map: Reader::Knn(&ph.dyn_map),
             frame_map: match &ph.frame_map {
                 Some(m) => Reader::of(m, ph.frame_pre.as_ref()),
                 None => Reader::of(&seg.map, seg.map_pre.as_ref()),

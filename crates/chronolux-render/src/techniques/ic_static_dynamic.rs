@@ -134,7 +134,7 @@
 use crate::framework::integrator::{RenderedFrame, render_camera_rays};
 use crate::kernels::gather::irradiance_cache::IrradianceCache;
 use crate::kernels::gather::irradiance_cache::stratum_direction;
-use crate::kernels::gather::photon_map::{Lookup, PhotonMap, StoredPhoton, cancel_twins};
+use crate::kernels::gather::photon_map::{PhotonMap, StoredPhoton, cancel_twins};
 use crate::kernels::gather::precomputed::PrecomputedMap;
 use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource, NoIndirect};
 use crate::kernels::gather::{
@@ -454,36 +454,26 @@ struct DynamicPart {
 }
 
 /// The photons of frame `scene` in segment `seg` (see [`FramePhotons`]).
-/// What the gathers of one map read: its k-NN estimate, or its precomputed irradiance when
-/// `pmic.precompute_stride > 0` (the estimator `pm-ic` defaults to; the maps' other uses,
-/// the influence and the density correction, stay k-NN estimates).
-#[derive(Clone, Copy)]
-enum Reader<'a> {
-    Knn(&'a PhotonMap),
-    Precomputed(&'a PrecomputedMap),
-}
-
-impl<'a> Reader<'a> {
-    fn of(knn: &'a PhotonMap, pre: Option<&'a PrecomputedMap>) -> Self {
-        pre.map_or(Reader::Knn(knn), Reader::Precomputed)
+/// What the gathers of one map read: its precomputed irradiance `pre` when there is one
+/// (`pmic.precompute_stride > 0`), else its k-NN estimate (the maps' other uses, the
+/// influence and the density correction, stay k-NN estimates).
+fn reader<'a>(knn: &'a PhotonMap, pre: Option<&'a PrecomputedMap>) -> &'a dyn RadianceMap {
+    match pre {
+        Some(p) => p,
+        None => knn,
     }
 }
 
-impl RadianceMap for Reader<'_> {
-    #[inline]
-    fn gather_radiance(
-        &self,
-        x: Vec3,
-        n: Vec3,
-        wo: Vec3,
-        bsdf: &chronolux_core::bsdf::Bsdf,
-        lookup: &Lookup,
-        r_max: f32,
-    ) -> Rgb {
-        match self {
-            Reader::Knn(m) => m.gather_radiance(x, n, wo, bsdf, lookup, r_max),
-            Reader::Precomputed(m) => m.gather_radiance(x, n, wo, bsdf, lookup, r_max),
-        }
+/// What the gathers in a frame read: the frame's map (`None` when nothing changed: the
+/// static map is it), as [`reader`] chooses.
+fn frame_reader<'a>(
+    seg: &'a Segment,
+    frame_map: Option<&'a PhotonMap>,
+    frame_pre: Option<&'a PrecomputedMap>,
+) -> &'a dyn RadianceMap {
+    match frame_map {
+        Some(m) => reader(m, frame_pre),
+        None => reader(&seg.map, seg.map_pre.as_ref()),
     }
 }
 
@@ -792,8 +782,7 @@ impl IcStaticDynamic {
         let all_dynamic = !seg.lights_static;
         let static_before = seg.cache.len();
         {
-            let (static_scene, static_map) =
-                (&seg.scene, Reader::of(&seg.map, seg.map_pre.as_ref()));
+            let (static_scene, static_map) = (&seg.scene, reader(&seg.map, seg.map_pre.as_ref()));
             let dynamic = &seg.dynamic;
             extend_cache(
                 &mut seg.cache,
@@ -803,7 +792,7 @@ impl IcStaticDynamic {
                     let q = &points[i].1;
                     !(all_dynamic || dynamic.get(q.instance as usize).copied().unwrap_or(true))
                 },
-                |q, k| gather_at(static_scene, s, &[&static_map], q.p, q.n, k),
+                |q, k| gather_at(static_scene, s, &[static_map], q.p, q.n, k),
             );
         }
         if let Some(loose) = &mut seg.loose {
@@ -852,12 +841,9 @@ impl IcStaticDynamic {
             dynamic: &seg.dynamic,
             // The sparse signed dynamic map stays a k-NN estimate (module doc, "The gather
             // estimator").
-            dyn_map: Reader::Knn(&ph.dyn_map),
-            frame_map: match &ph.frame_map {
-                Some(m) => Reader::of(m, ph.frame_pre.as_ref()),
-                None => Reader::of(&seg.map, seg.map_pre.as_ref()),
-            },
-            static_map: Reader::of(&seg.map, seg.map_pre.as_ref()),
+            dyn_map: &ph.dyn_map,
+            frame_map: frame_reader(seg, ph.frame_map.as_ref(), ph.frame_pre.as_ref()),
+            static_map: reader(&seg.map, seg.map_pre.as_ref()),
         };
         let recs = seg.cache.records();
         let (rec_beta, rec_corr): (Vec<f32>, Vec<Rgb>) =
@@ -897,16 +883,13 @@ impl IcStaticDynamic {
             })
             .collect();
         let mut dyn_cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
-        let frame_reader = match &ph.frame_map {
-            Some(m) => Reader::of(m, ph.frame_pre.as_ref()),
-            None => Reader::of(&seg.map, seg.map_pre.as_ref()),
-        };
+        let frame = frame_reader(seg, ph.frame_map.as_ref(), ph.frame_pre.as_ref());
         let dyn_records = extend_cache(
             &mut dyn_cache,
             points,
             &s.cache,
             |i| point_beta[i] > 0.0,
-            |q, k| gather_at(scene, s, &[&frame_reader], q.p, q.n, k),
+            |q, k| gather_at(scene, s, &[frame], q.p, q.n, k),
         );
         let dyn_loose = seg.loose.as_ref().map(|l| {
             let mut c = IrradianceCache::new(l.accuracy, base_cell(scene));
@@ -930,10 +913,7 @@ impl IcStaticDynamic {
         StaticDynamicSource {
             settings: &self.settings.pmic,
             dynamic_map: &st.dyn_map,
-            frame_reader: match &st.frame_map {
-                Some(m) => Reader::of(m, st.frame_pre.as_ref()),
-                None => Reader::of(&seg.map, seg.map_pre.as_ref()),
-            },
+            frame_reader: frame_reader(seg, st.frame_map.as_ref(), st.frame_pre.as_ref()),
             dynamic_instances: &seg.dynamic,
             all_dynamic: !seg.lights_static,
             static_cache: &seg.cache,
@@ -1005,9 +985,9 @@ struct Correction<'a> {
     frame: &'a FrameScene,
     static_scene: &'a FrameScene,
     dynamic: &'a [bool],
-    dyn_map: Reader<'a>,
-    frame_map: Reader<'a>,
-    static_map: Reader<'a>,
+    dyn_map: &'a dyn RadianceMap,
+    frame_map: &'a dyn RadianceMap,
+    static_map: &'a dyn RadianceMap,
 }
 
 impl Correction<'_> {
@@ -1033,7 +1013,7 @@ impl Correction<'_> {
                 let l = radiance(gather_ray_visiting(
                     self.frame,
                     s,
-                    &[&self.dyn_map],
+                    &[self.dyn_map],
                     x,
                     n,
                     dir,
@@ -1042,16 +1022,9 @@ impl Correction<'_> {
                 ));
                 sum += if touched {
                     let (mut a, mut b) = (start.clone(), start);
-                    let lf = gather_ray_hit(self.frame, s, &[&self.frame_map], x, n, dir, &mut a);
-                    let ls = gather_ray_hit(
-                        self.static_scene,
-                        s,
-                        &[&self.static_map],
-                        x,
-                        n,
-                        dir,
-                        &mut b,
-                    );
+                    let lf = gather_ray_hit(self.frame, s, &[self.frame_map], x, n, dir, &mut a);
+                    let ls =
+                        gather_ray_hit(self.static_scene, s, &[self.static_map], x, n, dir, &mut b);
                     radiance(lf) - radiance(ls)
                 } else {
                     l
@@ -1156,7 +1129,7 @@ struct StaticDynamicSource<'a> {
     settings: &'a PmIcSettings,
     dynamic_map: &'a PhotonMap,
     /// What the gathers not stored read (the frame map, or the static map).
-    frame_reader: Reader<'a>,
+    frame_reader: &'a dyn RadianceMap,
     dynamic_instances: &'a [bool],
     all_dynamic: bool,
     static_cache: &'a IrradianceCache,
@@ -1184,7 +1157,7 @@ impl StaticDynamicSource<'_> {
         gather_at(
             scene,
             self.settings,
-            &[&self.frame_reader],
+            &[self.frame_reader],
             q.p,
             q.n,
             point_key(q.p, q.n),

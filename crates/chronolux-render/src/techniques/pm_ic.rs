@@ -6,10 +6,9 @@
 use crate::framework::integrator::{RenderedFrame, render_camera_rays};
 use crate::kernels::gather::irradiance_cache::IrradianceCache;
 use crate::kernels::gather::photon_map::PhotonMap;
-use crate::kernels::gather::precomputed::{GroupMaps, PrecomputedMap};
-use crate::kernels::gather::view::{CacheQuery, EyeView, IndirectSource};
+use crate::kernels::gather::precomputed::GroupMaps;
+use crate::kernels::gather::view::EyeView;
 use crate::kernels::gather::*;
-use chronolux_core::color::Rgb;
 use chronolux_core::sampling::hash_words;
 use chronolux_core::scene::frame::FrameScene;
 
@@ -31,46 +30,28 @@ impl PmIc {
         let t0 = std::time::Instant::now();
         let base = photon_base(s, frame);
         let key = hash_words(&[s.common.seed, base, 0x6963]);
-        let mut cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
-        if s.precompute_stride == 0 {
-            let maps = frame_maps(scene, s, base);
-            let t_photons = t0.elapsed().as_secs_f64();
-            let points = probe_points(
-                &EyeView::new(s, scene, &maps.caustic, &view::NoIndirect),
-                scene,
-                key,
-            );
-            let records = extend_cache(
-                &mut cache,
-                &points,
-                &s.cache,
-                |_| true,
-                |q, k| gather_at(scene, s, &[&maps.global], q.p, q.n, k),
-            );
-            let t_cache = t0.elapsed().as_secs_f64() - t_photons;
-            let src = CacheSource {
-                settings: s,
-                cache: &cache,
-                global: &maps.global,
-                unstored: Default::default(),
-            };
-            let mut out = self.eye_pass(scene, frame, &maps.caustic, &src, progress);
-            out.stats.rays += maps.rays;
-            let r = &mut out.report;
-            r.insert("global_photons_stored".into(), maps.global.len().into());
-            r.insert("caustic_photons_stored".into(), maps.caustic.len().into());
-            r.insert("cache_records".into(), records.into());
-            r.insert("unstored_gathers".into(), src.unstored.into_inner().into());
-            r.insert("seconds_photons".into(), t_photons.into());
-            r.insert("seconds_cache".into(), t_cache.into());
-            return out;
-        }
-        // Christensen's precomputed irradiance per light group, as `ic-selective` reads it.
-        let groups = GroupMaps::build(scene, s, base, s.precompute_stride, 0);
-        let group_maps: Vec<&PrecomputedMap> = groups.maps.iter().collect();
-        let (c, c_rays) = caustic_photons(scene, base..base + s.photons, s.common.seed, s.photons);
-        let caustic = PhotonMap::build(c);
+        // The global map read by k-NN estimates, or Christensen's precomputed irradiance
+        // per light group, as `ic-selective` reads it.
+        let (global, groups, caustic, photon_rays) = if s.precompute_stride == 0 {
+            let m = frame_maps(scene, s, base);
+            (Some(m.global), None, m.caustic, m.rays)
+        } else {
+            let g = GroupMaps::build(scene, s, base, s.precompute_stride, 0);
+            let (c, c_rays) =
+                caustic_photons(scene, base..base + s.photons, s.common.seed, s.photons);
+            let rays = g.rays + c_rays;
+            (None, Some(g), PhotonMap::build(c), rays)
+        };
+        let maps: Vec<&dyn RadianceMap> = (global.iter().map(|m| m as &dyn RadianceMap))
+            .chain(
+                groups
+                    .iter()
+                    .flat_map(|g| &g.maps)
+                    .map(|m| m as &dyn RadianceMap),
+            )
+            .collect();
         let t_photons = t0.elapsed().as_secs_f64();
+        let mut cache = IrradianceCache::new(s.cache.accuracy, base_cell(scene));
         let points = probe_points(
             &EyeView::new(s, scene, &caustic, &view::NoIndirect),
             scene,
@@ -81,75 +62,33 @@ impl PmIc {
             &points,
             &s.cache,
             |_| true,
-            |q, k| gather_at(scene, s, &group_maps, q.p, q.n, k),
+            |q, k| gather_at(scene, s, &maps, q.p, q.n, k),
         );
         let t_cache = t0.elapsed().as_secs_f64() - t_photons;
-        let src = PrecomputedSource {
+        let src = CacheSource {
             settings: s,
             cache: &cache,
-            maps: &group_maps,
+            maps: &maps,
             unstored: Default::default(),
         };
-        let mut out = self.eye_pass(scene, frame, &caustic, &src, progress);
-        out.stats.rays += groups.rays + c_rays;
+        let eye = EyeView::new(s, scene, &caustic, &src);
+        let mut out = render_camera_rays(&eye, scene, frame, s.common.spp, s.common.seed, progress);
+        out.stats.rays += photon_rays;
         let r = &mut out.report;
-        r.insert(
-            "global_photons_stored".into(),
-            groups.photons.iter().sum::<usize>().into(),
-        );
-        r.insert("precomputed_points".into(), groups.points().into());
-        r.insert("light_groups".into(), groups.groups().into());
+        r.insert("photons".into(), s.photons.into());
+        let stored = global.as_ref().map_or(0, PhotonMap::len)
+            + groups.iter().flat_map(|g| &g.photons).sum::<usize>();
+        r.insert("global_photons_stored".into(), stored.into());
+        if let Some(g) = &groups {
+            r.insert("precomputed_points".into(), g.points().into());
+            r.insert("light_groups".into(), g.groups().into());
+        }
         r.insert("caustic_photons_stored".into(), caustic.len().into());
         r.insert("cache_records".into(), records.into());
         r.insert("unstored_gathers".into(), src.unstored.into_inner().into());
         r.insert("seconds_photons".into(), t_photons.into());
         r.insert("seconds_cache".into(), t_cache.into());
         out
-    }
-
-    /// The camera samples of a frame, reading `src` at diffuse eye vertices.
-    fn eye_pass<S: IndirectSource>(
-        &self,
-        scene: &FrameScene,
-        frame: u32,
-        caustic: &PhotonMap,
-        src: &S,
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> RenderedFrame {
-        let s = &self.settings;
-        let eye = EyeView::new(s, scene, caustic, src);
-        let mut out = render_camera_rays(&eye, scene, frame, s.common.spp, s.common.seed, progress);
-        out.report.insert("photons".into(), s.photons.into());
-        out
-    }
-}
-
-/// `pm-ic`'s irradiance source with the precomputed estimator: one cache, gathers read the
-/// light groups' precomputed maps.
-struct PrecomputedSource<'a> {
-    settings: &'a PmIcSettings,
-    cache: &'a IrradianceCache,
-    /// The light groups' maps, summed by each gather ray.
-    maps: &'a [&'a PrecomputedMap],
-    unstored: std::sync::atomic::AtomicU64,
-}
-
-impl IndirectSource for PrecomputedSource<'_> {
-    fn irradiance(&self, scene: &FrameScene, q: &CacheQuery) -> Rgb {
-        if let Some((e, _)) = self.cache.interpolate(q.p, q.n) {
-            return e;
-        }
-        self.unstored
-            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        gather_at(
-            scene,
-            self.settings,
-            self.maps,
-            q.p,
-            q.n,
-            point_key(q.p, q.n),
-        )
-        .e
     }
 }
 

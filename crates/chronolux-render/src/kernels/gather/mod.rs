@@ -223,8 +223,9 @@ pub fn world_radius(scene: &FrameScene, l: &Lookup) -> f32 {
 
 /// What a gather ray reads at the first non-delta vertex of its chain: a photon map's k-NN
 /// radiance estimate ([`PhotonMap::radiance`]) or precomputed irradiance
-/// ([`precomputed::PrecomputedMap`]), or either chosen at run time.
-pub trait RadianceMap {
+/// ([`precomputed::PrecomputedMap`]); `&dyn RadianceMap` when the choice is made at run
+/// time. Read from the parallel gathers, hence `Sync`.
+pub trait RadianceMap: Sync {
     /// Radiance reflected towards `wo` by `bsdf` at `x` (side normal `n`).
     fn gather_radiance(
         &self,
@@ -486,11 +487,12 @@ pub fn frame_maps(scene: &FrameScene, s: &PmIcSettings, base: u64) -> FrameMaps 
     }
 }
 
-/// The irradiance source of `pm-ic`: one cache, gathers read one global map.
+/// The irradiance source of `pm-ic`: one cache; the gathers where it has no record read
+/// `maps` (summed), as the cache's own gathers do.
 pub struct CacheSource<'a> {
     pub settings: &'a PmIcSettings,
     pub cache: &'a IrradianceCache,
-    pub global: &'a PhotonMap,
+    pub maps: &'a [&'a dyn RadianceMap],
     pub unstored: std::sync::atomic::AtomicU64,
 }
 
@@ -504,7 +506,7 @@ impl IndirectSource for CacheSource<'_> {
         gather_at(
             scene,
             self.settings,
-            &[self.global],
+            self.maps,
             q.p,
             q.n,
             point_key(q.p, q.n),

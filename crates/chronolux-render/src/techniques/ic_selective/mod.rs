@@ -725,6 +725,16 @@ pub fn stratum_dir(s: &PmIcSettings, fr: &Frame, id: u64, idx: usize, cast: u32)
     stratum_direction(fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi)
 }
 
+/// Direction of stratum `idx` of record `id` at normal `n` cast in frame `cast`, and the
+/// stream of its gather ray's delta chain (what both casts below draw).
+fn stratum_ray(s: &PmIcSettings, n: Vec3, id: u64, idx: usize, cast: u32) -> (Vec3, Pcg32) {
+    let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
+    let (xi, psi, rng) = stratum_rngs(s.common.seed, cast, id, idx);
+    let fr = Frame::from_normal(n);
+    let (dir, _) = stratum_direction(&fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi);
+    (dir, rng)
+}
+
 /// Casts stratum `idx` of record `id` at (p, n) in frame `frame` (reading `global`, the
 /// frame's global map).
 #[allow(clippy::too_many_arguments)]
@@ -738,10 +748,7 @@ pub fn cast_stratum(
     idx: usize,
     frame: u32,
 ) -> Stratum {
-    let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
-    let (xi, psi, mut rng) = stratum_rngs(s.common.seed, frame, id, idx);
-    let fr = Frame::from_normal(n);
-    let (dir, _) = stratum_direction(&fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi);
+    let (dir, mut rng) = stratum_ray(s, n, id, idx, frame);
     match gather_ray_hit(scene, s, &[global], p, n, dir, &mut rng) {
         Some((l, d, inst)) => Stratum {
             l,
@@ -771,10 +778,7 @@ pub fn cast_stratum_terms(
     idx: usize,
     frame: u32,
 ) -> Stratum {
-    let (m, np) = (s.gather_m.max(1), s.gather_n.max(1));
-    let (xi, psi, mut rng) = stratum_rngs(s.common.seed, frame, id, idx);
-    let fr = Frame::from_normal(n);
-    let (dir, _) = stratum_direction(&fr, m, np, idx as u32 / np, idx as u32 % np, xi, psi);
+    let (dir, mut rng) = stratum_ray(s, n, id, idx, frame);
     match gather_hit(scene, s, p, n, dir, &mut rng) {
         Some(hit) => {
             let mut terms = [Rgb::ZERO; MAX_GROUPS];

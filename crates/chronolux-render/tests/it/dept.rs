@@ -1,7 +1,7 @@
 //! DEPT: element bookkeeping on moving objects, the filters, convergence to the path
 //! tracer on a static diffuse scene, determinism.
 
-use crate::{blocks, frame0};
+use crate::{block_errors, blocks, frame0};
 use chronolux_core::color::Rgb;
 use chronolux_core::math::Vec3;
 use chronolux_core::scene::desc::{
@@ -21,17 +21,6 @@ use chronolux_render::kernels::elements::{Dept, DeptSettings};
 use chronolux_render::kernels::path::{PathSettings, PathTracer};
 use chronolux_render::kernels::photon::trace_photons;
 use std::sync::Arc;
-
-/// Largest relative error over 8×8-pixel blocks, and of the image mean.
-fn block_errors(img: &[glam::Vec3], reference: &[f64], w: usize) -> (f64, f64) {
-    let b = blocks(img, w, 8);
-    let max = b
-        .iter()
-        .zip(reference)
-        .fold(0.0f64, |m, (x, r)| m.max(((x - r) / r).abs()));
-    let (sa, sr) = (b.iter().sum::<f64>(), reference.iter().sum::<f64>());
-    (max, ((sa - sr) / sr).abs())
-}
 
 /// On the static diffuse Cornell box, `dept` converges to the path tracer up to the
 /// element discretisation bias.

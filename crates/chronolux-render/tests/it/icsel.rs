@@ -2,7 +2,7 @@
 //! per-stratum agreement with a frame-by-frame gather, no accumulation of error.
 
 use crate::pmic::cornell_moving;
-use crate::{bits, blocks};
+use crate::{bits, block_errors, blocks};
 use chronolux_core::color::{Rgb, luminance};
 use chronolux_core::math::Frame;
 use chronolux_core::sampling::rng::Pcg32;
@@ -507,13 +507,7 @@ fn against_pm_ic(desc: SceneDesc, light_terms: bool) -> Vec<(f64, f64, RenderedF
         .zip(&b)
         .zip(keep)
         .map(|((x, y), f)| {
-            let (bx, by) = (blocks(&x.pixels, 32, 8), blocks(&y.pixels, 32, 8));
-            let max = bx
-                .iter()
-                .zip(&by)
-                .fold(0.0f64, |m, (p, q)| m.max(((p - q) / q).abs()));
-            let (sa, sb) = (bx.iter().sum::<f64>(), by.iter().sum::<f64>());
-            let mean = ((sa - sb) / sb).abs();
+            let (max, mean) = block_errors(&x.pixels, &blocks(&y.pixels, 32, 8), 32);
             eprintln!(
                 "frame {f}: block {max:.4}, mean {mean:.4}, report {:?}",
                 x.report
@@ -626,13 +620,7 @@ fn pm_ic_with_precomputed_irradiance_agrees_with_its_knn_estimate_per_block() {
     };
     let (pre, knn) = (run(4), run(0));
     for ((x, y), f) in pre.iter().zip(&knn).zip(frames) {
-        let (bx, by) = (blocks(&x.pixels, 32, 8), blocks(&y.pixels, 32, 8));
-        let max = bx
-            .iter()
-            .zip(&by)
-            .fold(0.0f64, |m, (p, q)| m.max(((p - q) / q).abs()));
-        let (sa, sb) = (bx.iter().sum::<f64>(), by.iter().sum::<f64>());
-        let mean = ((sa - sb) / sb).abs();
+        let (max, mean) = block_errors(&x.pixels, &blocks(&y.pixels, 32, 8), 32);
         eprintln!("frame {f}: block {max:.4}, mean {mean:.4}");
         assert!(
             max < 0.18 && mean < 0.03,

@@ -47,6 +47,18 @@ pub fn source(
     chronolux_core::scene::source::FrameSource::new(b, fps, frames)
 }
 
+/// Largest relative error over 8×8-pixel blocks of `img` (`w` pixels wide) against the
+/// blocks `reference` ([`blocks`]), and the relative error of the image mean.
+pub fn block_errors(img: &[glam::Vec3], reference: &[f64], w: usize) -> (f64, f64) {
+    let b = blocks(img, w, 8);
+    let max = b
+        .iter()
+        .zip(reference)
+        .fold(0.0f64, |m, (x, r)| m.max(((x - r) / r).abs()));
+    let (sa, sr) = (b.iter().sum::<f64>(), reference.iter().sum::<f64>());
+    (max, ((sa - sr) / sr).abs())
+}
+
 /// Mean of each `b`×`b` block (channel average).
 pub fn blocks(px: &[glam::Vec3], w: usize, b: usize) -> Vec<f64> {
     let h = px.len() / w;

@@ -2,7 +2,7 @@
 //! and gradients against analytic cases, convergence to the path tracer, determinism.
 
 use crate::frame0;
-use crate::{bits, blocks};
+use crate::{bits, block_errors, blocks};
 use chronolux_core::color::Rgb;
 use chronolux_core::math::Vec3;
 use chronolux_core::sampling::rng::Pcg32;
@@ -264,13 +264,7 @@ fn pm_ic_converges_to_path_tracing_on_the_cornell_box() {
     };
     let img = pm.render(&scene, 0, &|_| {});
     assert_eq!(img.invalid_samples, 0);
-    let b = blocks(&img.pixels, 32, 8);
-    let max = b
-        .iter()
-        .zip(&reference)
-        .fold(0.0f64, |m, (x, r)| m.max(((x - r) / r).abs()));
-    let (sa, sr) = (b.iter().sum::<f64>(), reference.iter().sum::<f64>());
-    let mean = ((sa - sr) / sr).abs();
+    let (max, mean) = block_errors(&img.pixels, &reference, 32);
     eprintln!(
         "pm-ic vs path: block {max}, mean {mean}, report {:?}",
         img.report
@@ -476,13 +470,7 @@ fn ic_static_dynamic_agrees_with_pm_ic_per_frame_on_a_moving_cube() {
         );
         let rb = sequence(&mut b, cornell_moving(), &frames);
         for (f, (x, y)) in ra.iter().zip(&rb).enumerate() {
-            let (bx, by) = (blocks(&x.pixels, 32, 8), blocks(&y.pixels, 32, 8));
-            let max = bx
-                .iter()
-                .zip(&by)
-                .fold(0.0f64, |m, (p, q)| m.max(((p - q) / p).abs()));
-            let (sa, sb) = (bx.iter().sum::<f64>(), by.iter().sum::<f64>());
-            let mean = ((sa - sb) / sa).abs();
+            let (max, mean) = block_errors(&y.pixels, &blocks(&x.pixels, 32, 8), 32);
             eprintln!(
                 "stride {stride}, correction_m {correction_m}, frame {f}: block {max}, mean {mean}, report {:?}",
                 y.report

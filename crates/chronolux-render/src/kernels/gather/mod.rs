@@ -293,30 +293,80 @@ pub fn gather_ray_visiting<M: RadianceMap + ?Sized>(
     n: Vec3,
     dir: Vec3,
     rng: &mut Pcg32,
-    mut visit: impl FnMut(u32),
+    visit: impl FnMut(u32),
 ) -> Option<(Rgb, f32, u32)> {
-    let r_max = world_radius(scene, &s.global);
+    let end = gather_chain(scene, s, x, n, dir, rng, visit)?;
+    let l = match &end.read {
+        Some(v) => {
+            let r_max = world_radius(scene, &s.global);
+            let mut l = Rgb::ZERO;
+            for m in maps {
+                l += m.gather_radiance(end.last.0, end.last.1, v.wo, &v.bsdf, &s.global, r_max);
+            }
+            v.beta * l
+        }
+        None => Rgb::ZERO,
+    };
+    Some((l, end.dist, end.instance))
+}
+
+/// Where a gather ray's chain ended ([`gather_chain`]).
+pub struct ChainEnd {
+    /// The first non-delta vertex, whose radiance the gather reads; `None` when the chain
+    /// was cut (depth limit or zero throughput) before one.
+    pub read: Option<ChainVertex>,
+    /// Point and side normal (turned towards the ray) of the chain's last vertex: the
+    /// vertex read, or the last delta vertex of a cut chain.
+    pub last: (Vec3, Vec3),
+    /// Distance to the chain's first hit, and its instance.
+    pub dist: f32,
+    pub instance: u32,
+}
+
+/// The vertex a gather ray reads ([`ChainEnd::read`]).
+pub struct ChainVertex {
+    /// Direction back along the ray.
+    pub wo: Vec3,
+    pub bsdf: chronolux_core::bsdf::Bsdf,
+    /// Throughput of the delta chain before it.
+    pub beta: Rgb,
+}
+
+/// The delta chain of a gather ray from (x, n) along `dir`, followed up to
+/// `max_specular_depth` bounces with numbers from `rng` (three per vertex), calling
+/// `visit` with every vertex's instance; `None` when nothing is hit, the chain leaves
+/// the scene or its sampling fails. What every gather reads at its end is chosen by the
+/// caller ([`gather_ray_visiting`], [`precomputed::gather_hit`]).
+pub fn gather_chain(
+    scene: &FrameScene,
+    s: &PmIcSettings,
+    x: Vec3,
+    n: Vec3,
+    dir: Vec3,
+    rng: &mut Pcg32,
+    mut visit: impl FnMut(u32),
+) -> Option<ChainEnd> {
     let mut ray = spawn_ray(x, n, dir);
     let mut beta = Rgb::ONE;
-    let mut first = None;
+    let mut first: Option<(f32, u32)> = None;
+    let mut last = (x, n);
     for _ in 0..=s.max_specular_depth {
         let hit = scene.intersect(&ray)?;
         let si = scene.interaction(&hit, &ray);
         visit(si.instance);
-        if first.is_none() {
-            first = Some(((si.p - x).length(), si.instance));
-        }
+        let (dist, instance) = *first.get_or_insert(((si.p - x).length(), si.instance));
         let wo = -ray.d.normalize();
         let bsdf = scene.bsdf(&si);
         let (u_lobe, u_dir) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
+        let ns = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };
+        last = (si.p, ns);
         if bsdf.has_non_delta() {
-            let ns = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };
-            let mut l = Rgb::ZERO;
-            for m in maps {
-                l += m.gather_radiance(si.p, ns, wo, &bsdf, &s.global, r_max);
-            }
-            let (d, inst) = first.unwrap_or((0.0, si.instance));
-            return Some((beta * l, d, inst));
+            return Some(ChainEnd {
+                read: Some(ChainVertex { wo, bsdf, beta }),
+                last,
+                dist,
+                instance,
+            });
         }
         let bs = bsdf.sample(
             wo,
@@ -330,7 +380,12 @@ pub fn gather_ray_visiting<M: RadianceMap + ?Sized>(
         }
         ray = spawn_ray(si.p, si.ng, bs.wi);
     }
-    first.map(|(d, inst)| (Rgb::ZERO, d, inst))
+    first.map(|(dist, instance)| ChainEnd {
+        read: None,
+        last,
+        dist,
+        instance,
+    })
 }
 
 /// A final gather at (x, n) reading `maps`, its strata jittered from `key`.

@@ -53,9 +53,8 @@ use super::world_radius;
 use crate::kernels::photon::{PHOTON_CHUNK, trace_photon_path};
 use chronolux_core::bsdf::TransportMode;
 use chronolux_core::color::Rgb;
-use chronolux_core::geometry::spawn_ray;
 use chronolux_core::light::Light;
-use chronolux_core::math::{Vec2, Vec3};
+use chronolux_core::math::Vec3;
 use chronolux_core::parallel;
 use chronolux_core::sampling::rng::Pcg32;
 use chronolux_core::scene::frame::FrameScene;
@@ -300,8 +299,9 @@ pub struct GatherHit {
     pub instance: u32,
 }
 
-/// The gather ray of [`super::gather_ray_hit`] (same delta chain, same numbers drawn from
-/// `rng` at every vertex), stopping at the vertex whose radiance it would read: `None`
+/// The gather ray of [`super::gather_ray_hit`] (its delta chain, [`super::gather_chain`]:
+/// the same numbers drawn from `rng` at every vertex), at the vertex whose radiance it would
+/// read: `None`
 /// exactly where [`super::gather_ray_hit`] returns `None` (nothing hit, a chain that
 /// leaves the scene or whose sampling fails); a chain cut by the depth limit or a zero
 /// weight has `w = 0`.
@@ -313,41 +313,16 @@ pub fn gather_hit(
     dir: Vec3,
     rng: &mut Pcg32,
 ) -> Option<GatherHit> {
-    let mut ray = spawn_ray(x, n, dir);
-    let mut beta = Rgb::ONE;
-    let mut first: Option<(f32, u32)> = None;
-    let mut last = (x, n);
-    for _ in 0..=s.max_specular_depth {
-        let hit = scene.intersect(&ray)?;
-        let si = scene.interaction(&hit, &ray);
-        let (dist, instance) = *first.get_or_insert(((si.p - x).length(), si.instance));
-        let wo = -ray.d.normalize();
-        let bsdf = scene.bsdf(&si);
-        let (u_lobe, u_dir) = (rng.next_f32(), Vec2::new(rng.next_f32(), rng.next_f32()));
-        let ns = if wo.dot(si.ng) >= 0.0 { si.ng } else { -si.ng };
-        last = (si.p, ns);
-        if bsdf.has_non_delta() {
-            return Some(GatherHit {
-                x: si.p,
-                ns,
-                w: beta * bsdf.f(wo, ns, TransportMode::Radiance),
-                dist,
-                instance,
-            });
-        }
-        let bs = bsdf.sample(wo, u_lobe, u_dir, TransportMode::Radiance)?;
-        beta *= bs.weight;
-        if beta == Rgb::ZERO {
-            break;
-        }
-        ray = spawn_ray(si.p, si.ng, bs.wi);
-    }
-    first.map(|(dist, instance)| GatherHit {
-        x: last.0,
-        ns: last.1,
-        w: Rgb::ZERO,
-        dist,
-        instance,
+    let end = super::gather_chain(scene, s, x, n, dir, rng, |_| {})?;
+    let (x, ns) = end.last;
+    Some(GatherHit {
+        x,
+        ns,
+        w: end.read.map_or(Rgb::ZERO, |v| {
+            v.beta * v.bsdf.f(v.wo, ns, TransportMode::Radiance)
+        }),
+        dist: end.dist,
+        instance: end.instance,
     })
 }
 
